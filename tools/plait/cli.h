@@ -1,0 +1,37 @@
+/* The plait command line, callable in-process (tests) as well as from main(). */
+#ifndef PLAIT_CLI_H
+#define PLAIT_CLI_H
+
+#include "scene.h"
+#include "writers.h"
+
+#include <stdbool.h>
+#include <stdio.h>
+
+/* Exit codes. */
+#define PLAIT_EXIT_OK 0
+#define PLAIT_EXIT_FAILURE 1 /* bad scene, failed simulation, cannot write */
+#define PLAIT_EXIT_USAGE 2   /* bad command-line arguments */
+
+/* `plait ARGS...`: argv[0] is the program name. Normal output goes to out, messages to err. */
+int plait_cli_main(int argc, char **argv, FILE *out, FILE *err);
+
+typedef struct plait_run_options {
+	const char *scene_path; /* NULL runs the built-in demo */
+	const char *out_dir;
+	int frames; /* < 0: as many as the scene says */
+	const plait_writer_format *format;
+	bool progress; /* a progress line on err, rewritten in place */
+} plait_run_options;
+
+/* `plait run` once its arguments are parsed; returns an exit code. */
+int plait_run(const plait_run_options *options, FILE *out, FILE *err);
+
+/* `plait run ARGS...` and `plait explain ARGS...` with argv[0] the subcommand. */
+int plait_cli_run(int argc, char **argv, FILE *out, FILE *err);
+int plait_cli_explain(int argc, char **argv, FILE *out, FILE *err);
+
+/* Loads the scene at path, or the demo when path is NULL. */
+bool plait_cli_load_scene(const char *path, plait_scene *scene, plait_tool_error *error);
+
+#endif

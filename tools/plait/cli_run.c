@@ -1,0 +1,224 @@
+/* `plait run`: simulate a scene and write every frame. */
+#include "cli.h"
+
+#include "files.h"
+#include "scene.h"
+#include "stats_log.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static void plait_run_usage(FILE *f)
+{
+	fprintf(f, "usage: plait run [SCENE.json] [--out DIR] [--frames N] [--format obj|pc2]\n");
+}
+
+static void plait_run_help(FILE *f)
+{
+	plait_run_usage(f);
+	fprintf(f, "\nSimulates SCENE.json (without it, a built-in demo: cloth falling on a sphere) and writes\n"
+	           "frame 0 and every simulated frame to DIR, plus DIR/stats.jsonl with one line per frame.\n\n"
+	           "  --out DIR        output folder, created if missing (default: out)\n"
+	           "  --frames N       frames to simulate (default: the scene's \"frames\")\n"
+	           "  --format FORMAT  obj: DIR/NAME.FRAME.obj per object and frame (default)\n"
+	           "                   pc2: DIR/NAME.pc2 point cache per object\n"
+	           "  -h, --help       this help\n\n"
+	           "Exit status: 0 done, 1 scene error or failed simulation, 2 bad arguments.\n");
+}
+
+static double plait_now_seconds(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+// Value of "--name VALUE" or "--name=VALUE" at argv[*i]; NULL if argv[*i] is not that option.
+static const char *plait_option_value(int argc, char **argv, int *i, const char *name, bool *missing)
+{
+	size_t n = strlen(name);
+	const char *arg = argv[*i];
+	if (strncmp(arg, name, n) != 0)
+		return NULL;
+	if (arg[n] == '=')
+		return arg + n + 1;
+	if (arg[n] != '\0')
+		return NULL;
+	if (*i + 1 >= argc) {
+		*missing = true;
+		return NULL;
+	}
+	*i += 1;
+	return argv[*i];
+}
+
+int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
+{
+	plait_run_options options = {.out_dir = "out", .frames = -1, .format = &plait_writer_obj};
+	for (int i = 1; i < argc; ++i) {
+		const char *arg = argv[i];
+		bool missing = false;
+		const char *value;
+		if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
+			plait_run_help(out);
+			return PLAIT_EXIT_OK;
+		} else if ((value = plait_option_value(argc, argv, &i, "--out", &missing)) != NULL) {
+			if (value[0] == '\0') {
+				fprintf(err, "plait run: --out needs a folder name\n");
+				plait_run_usage(err);
+				return PLAIT_EXIT_USAGE;
+			}
+			options.out_dir = value;
+		} else if ((value = plait_option_value(argc, argv, &i, "--frames", &missing)) != NULL) {
+			char *end;
+			long frames = strtol(value, &end, 10);
+			if (end == value || *end != '\0' || frames < 0 || frames > 1000000) {
+				fprintf(err, "plait run: --frames expects a whole number from 0 to 1000000, got '%s'\n",
+				        value);
+				plait_run_usage(err);
+				return PLAIT_EXIT_USAGE;
+			}
+			options.frames = (int)frames;
+		} else if ((value = plait_option_value(argc, argv, &i, "--format", &missing)) != NULL) {
+			options.format = plait_writer_find_format(value);
+			if (options.format == NULL) {
+				fprintf(err, "plait run: unknown format '%s' (expected obj or pc2)\n", value);
+				plait_run_usage(err);
+				return PLAIT_EXIT_USAGE;
+			}
+		} else if (missing) {
+			fprintf(err, "plait run: %s needs a value\n", arg);
+			plait_run_usage(err);
+			return PLAIT_EXIT_USAGE;
+		} else if (arg[0] == '-' && arg[1] != '\0') {
+			fprintf(err, "plait run: unknown option '%s'\n", arg);
+			plait_run_usage(err);
+			return PLAIT_EXIT_USAGE;
+		} else if (options.scene_path != NULL) {
+			fprintf(err, "plait run: one scene at a time (got '%s' and '%s')\n", options.scene_path, arg);
+			plait_run_usage(err);
+			return PLAIT_EXIT_USAGE;
+		} else {
+			options.scene_path = arg;
+		}
+	}
+	int fd = fileno(err);
+	options.progress = fd >= 0 && isatty(fd);
+	return plait_run(&options, out, err);
+}
+
+static void plait_run_progress(FILE *err, int frame, int frames, double step_ms, double elapsed)
+{
+	double left = frame > 0 ? elapsed / frame * (frames - frame) : 0.0;
+	fprintf(err, "\rframe %d/%d  %.1f ms/frame  ~%.0fs left   ", frame, frames, step_ms, left);
+	fflush(err);
+}
+
+typedef struct plait_run_outputs {
+	plait_writer *writer;
+	plait_stats_log stats;
+} plait_run_outputs;
+
+static bool plait_run_write(plait_run_outputs *outputs, plait_world_id world, int frame, double ms,
+                            plait_tool_error *error)
+{
+	plait_frame_stats stats = plait_world_get_stats(world);
+	return plait_writer_write_frame(outputs->writer, frame, error) &&
+	       plait_stats_log_write(&outputs->stats, frame, ms, &stats, error);
+}
+
+int plait_run(const plait_run_options *options, FILE *out, FILE *err)
+{
+	plait_tool_error error = {{0}};
+	plait_scene scene;
+	if (!plait_cli_load_scene(options->scene_path, &scene, &error)) {
+		fprintf(err, "%s\n", error.message);
+		return PLAIT_EXIT_FAILURE;
+	}
+	for (int i = 0; i < scene.warning_count; ++i)
+		fprintf(err, "warning: %s\n", scene.warnings[i]);
+	int frames = options->frames >= 0 ? options->frames : scene.frames;
+	if (options->scene_path == NULL)
+		fprintf(out, "plait: no scene given, running the built-in demo (cloth falling on a sphere)\n");
+
+	// Validate everything the solver checks before a single file exists.
+	plait_world_id world;
+	if (!plait_scene_create_world(&scene, &world, &error)) {
+		fprintf(err, "%s\n", error.message);
+		plait_scene_free(&scene);
+		return PLAIT_EXIT_FAILURE;
+	}
+	plait_run_outputs outputs = {0};
+	if (!plait_make_dirs(options->out_dir, &error) ||
+	    !plait_stats_log_open(&outputs.stats, options->out_dir, &error)) {
+		fprintf(err, "plait: %s\n", error.message);
+		plait_destroy_world(world);
+		plait_scene_free(&scene);
+		return PLAIT_EXIT_FAILURE;
+	}
+	outputs.writer = plait_writer_open(options->format, options->out_dir, world, &error);
+	if (outputs.writer == NULL) {
+		fprintf(err, "plait: %s\n", error.message);
+		plait_atomic_abort(&outputs.stats.file);
+		plait_destroy_world(world);
+		plait_scene_free(&scene);
+		return PLAIT_EXIT_FAILURE;
+	}
+
+	int status = PLAIT_EXIT_OK;
+	int done = 0;
+	double start = plait_now_seconds(), step_total_ms = 0.0;
+	if (!plait_run_write(&outputs, world, 0, 0.0, &error)) {
+		fprintf(err, "plait: %s\n", error.message);
+		status = PLAIT_EXIT_FAILURE;
+	}
+	for (int frame = 1; status == PLAIT_EXIT_OK && frame <= frames; ++frame) {
+		// Keyframes and pins for the frame being stepped to.
+		if (!plait_scene_apply_frame(&scene, world, frame, &error)) {
+			fprintf(err, "%s%s\n", options->progress ? "\n" : "", error.message);
+			status = PLAIT_EXIT_FAILURE;
+			break;
+		}
+		plait_error core_error = {0};
+		double t0 = plait_now_seconds();
+		plait_result result = plait_world_step(world, &core_error);
+		double ms = 1000.0 * (plait_now_seconds() - t0);
+		if (result != PLAIT_OK) {
+			fprintf(err, "%s%s: frame %d: the simulation failed (%s): %s\n", options->progress ? "\n" : "",
+			        scene.file, frame, plait_result_name(result), core_error.message);
+			fprintf(err, "frames 0 to %d are in %s\n", frame - 1, options->out_dir);
+			status = PLAIT_EXIT_FAILURE;
+			break;
+		}
+		step_total_ms += ms;
+		if (!plait_run_write(&outputs, world, frame, ms, &error)) {
+			fprintf(err, "%splait: %s\n", options->progress ? "\n" : "", error.message);
+			status = PLAIT_EXIT_FAILURE;
+			break;
+		}
+		done = frame;
+		if (options->progress)
+			plait_run_progress(err, frame, frames, step_total_ms / frame, plait_now_seconds() - start);
+	}
+	if (options->progress && done > 0)
+		fprintf(err, "\r%60s\r", "");
+	// Finish the files even after a failure: the frames written so far stay usable.
+	int objects_written = outputs.writer->object_count;
+	if (!plait_writer_close(outputs.writer, &error) || !plait_stats_log_close(&outputs.stats, &error)) {
+		fprintf(err, "plait: %s\n", error.message);
+		plait_atomic_abort(&outputs.stats.file);
+		status = PLAIT_EXIT_FAILURE;
+	}
+	if (status == PLAIT_EXIT_OK) {
+		double seconds = plait_now_seconds() - start;
+		fprintf(out, "plait: simulated %d frame%s of %s in %.2f s (%.1f ms/frame in the solver)\n", done,
+		        done == 1 ? "" : "s", scene.file, seconds, done > 0 ? step_total_ms / done : 0.0);
+		fprintf(out, "plait: wrote frames 0 to %d of %d object%s as %s, and stats.jsonl, to %s/\n", done,
+		        objects_written, objects_written == 1 ? "" : "s", options->format->name, options->out_dir);
+	}
+	plait_destroy_world(world);
+	plait_scene_free(&scene);
+	return status;
+}
