@@ -1,0 +1,65 @@
+/* Small vector and matrix helpers used everywhere in the library. Float, like the particle
+ * store: every hot array is float; doubles are used only where precision needs it (CCD). */
+#ifndef PLAIT_CORE_MATH_H
+#define PLAIT_CORE_MATH_H
+
+#include <math.h>
+#include <stdbool.h>
+
+#include <plait/plait.h>
+
+typedef plait_vec3 vec3;
+
+/* Row-major 3x3 matrix: m[row][column]. */
+typedef struct mat3 {
+	float m[3][3];
+} mat3;
+
+#define PLAIT_PI 3.14159265358979323846f
+
+static inline vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
+static inline vec3 v3_add(vec3 a, vec3 b) { return (vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
+static inline vec3 v3_sub(vec3 a, vec3 b) { return (vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static inline vec3 v3_scale(vec3 a, float s) { return (vec3){a.x * s, a.y * s, a.z * s}; }
+static inline vec3 v3_mul_add(vec3 a, float s, vec3 b) { return (vec3){a.x + s * b.x, a.y + s * b.y, a.z + s * b.z}; }
+static inline vec3 v3_neg(vec3 a) { return (vec3){-a.x, -a.y, -a.z}; }
+static inline float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3_cross(vec3 a, vec3 b)
+{
+	return (vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+static inline float v3_length_sq(vec3 a) { return v3_dot(a, a); }
+static inline float v3_length(vec3 a) { return sqrtf(v3_dot(a, a)); }
+static inline vec3 v3_lerp(vec3 a, vec3 b, float t) { return v3_mul_add(a, t, v3_sub(b, a)); }
+static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
+static inline vec3 v3_min(vec3 a, vec3 b) { return (vec3){fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
+static inline vec3 v3_max(vec3 a, vec3 b) { return (vec3){fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+
+/* Unit vector, or the zero vector when a is too short to have a direction. */
+static inline vec3 v3_normalize(vec3 a)
+{
+	float length = v3_length(a);
+	return length > 1e-30f ? v3_scale(a, 1.0f / length) : (vec3){0.0f, 0.0f, 0.0f};
+}
+
+static inline vec3 m3_mul_v3(const mat3 *a, vec3 v)
+{
+	return (vec3){a->m[0][0] * v.x + a->m[0][1] * v.y + a->m[0][2] * v.z,
+	              a->m[1][0] * v.x + a->m[1][1] * v.y + a->m[1][2] * v.z,
+	              a->m[2][0] * v.x + a->m[2][1] * v.y + a->m[2][2] * v.z};
+}
+
+/* Transpose times vector: the inverse rotation for orthonormal a. */
+static inline vec3 m3_tmul_v3(const mat3 *a, vec3 v)
+{
+	return (vec3){a->m[0][0] * v.x + a->m[1][0] * v.y + a->m[2][0] * v.z,
+	              a->m[0][1] * v.x + a->m[1][1] * v.y + a->m[2][1] * v.z,
+	              a->m[0][2] * v.x + a->m[1][2] * v.y + a->m[2][2] * v.z};
+}
+
+mat3 m3_identity(void);
+mat3 m3_mul(const mat3 *a, const mat3 *b);
+/* Rotation by degrees about x, then y, then z: R = Rz * Ry * Rx. */
+mat3 m3_from_euler_deg(vec3 degrees);
+
+#endif

@@ -1,0 +1,144 @@
+#include "dynamics/constraints.h"
+
+void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared)
+{
+	vec3 *x = particles->x;
+	const float *w = particles->w;
+	for (int c = 0; c < block->count; ++c) {
+		int i = block->pair[c][0], j = block->pair[c][1];
+		float w_sum = w[i] + w[j];
+		if (w_sum == 0.0f) {
+			continue;
+		}
+		vec3 d = v3_sub(x[j], x[i]);
+		float length = v3_length(d);
+		if (length < 1e-12f) {
+			continue;
+		}
+		float C = length - block->rest[c];
+		float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
+		if (isinf(alpha)) {
+			continue;
+		}
+		float alpha_tilde = alpha * inverse_h_squared;
+		float dlambda = (-C - alpha_tilde * block->lambda[c]) / (w_sum + alpha_tilde);
+		block->lambda[c] += dlambda;
+		vec3 n = v3_scale(d, dlambda / length);
+		x[i] = v3_mul_add(x[i], -w[i], n);
+		x[j] = v3_mul_add(x[j], w[j], n);
+	}
+}
+
+/* With e = p1 - p0, nA = e x (p2 - p0) and nB = (p0 - p1) x (p3 - p1) (the normals of the
+ * triangles (p0,p1,p2) and (p1,p0,p3), equal when flat and consistently oriented), the angle
+ * is atan2((nA x nB).e, nA.nB): the rotation about e taking nA to nB. Turning a wing about
+ * the hinge by phi moves it by phi times its height h, so the wing gradients are
+ * -n/h = -n |e| / |n|^2, and translation and rotation invariance give the hinge gradients as
+ * the wings' gradients weighted by where each wing projects onto the edge. */
+bool plait_dihedral_angle(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float *angle, vec3 gradient[4])
+{
+	vec3 e = v3_sub(p1, p0);
+	vec3 nA = v3_cross(e, v3_sub(p2, p0));
+	vec3 nB = v3_cross(v3_sub(p0, p1), v3_sub(p3, p1));
+	float e_length_sq = v3_length_sq(e);
+	float nA_sq = v3_length_sq(nA), nB_sq = v3_length_sq(nB);
+	if (e_length_sq < 1e-24f || nA_sq < 1e-30f || nB_sq < 1e-30f) {
+		return false;
+	}
+	float e_length = sqrtf(e_length_sq);
+	float sine = v3_dot(v3_cross(nA, nB), e) / e_length;
+	float cosine = v3_dot(nA, nB);
+	*angle = atan2f(sine, cosine);
+	if (gradient != NULL) {
+		vec3 g2 = v3_scale(nA, -e_length / nA_sq);
+		vec3 g3 = v3_scale(nB, -e_length / nB_sq);
+		float a2 = v3_dot(v3_sub(p2, p0), e) / e_length_sq;
+		float a3 = v3_dot(v3_sub(p3, p0), e) / e_length_sq;
+		gradient[0] = v3_add(v3_scale(g2, a2 - 1.0f), v3_scale(g3, a3 - 1.0f));
+		gradient[1] = v3_add(v3_scale(g2, -a2), v3_scale(g3, -a3));
+		gradient[2] = g2;
+		gradient[3] = g3;
+	}
+	return true;
+}
+
+void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared)
+{
+	vec3 *x = particles->x;
+	const float *w = particles->w;
+	for (int c = 0; c < block->count; ++c) {
+		const int *q = block->quad[c];
+		float wq[4] = {w[q[0]], w[q[1]], w[q[2]], w[q[3]]};
+		if (wq[0] + wq[1] + wq[2] + wq[3] == 0.0f) {
+			continue;
+		}
+		float angle;
+		vec3 g[4];
+		if (!plait_dihedral_angle(x[q[0]], x[q[1]], x[q[2]], x[q[3]], &angle, g)) {
+			continue;
+		}
+		float C = angle - block->rest_angle[c];
+		/* The shortest way round: a fold through +-pi must not unwind the long way. */
+		if (C > PLAIT_PI) {
+			C -= 2.0f * PLAIT_PI;
+		} else if (C < -PLAIT_PI) {
+			C += 2.0f * PLAIT_PI;
+		}
+		float denominator = 0.0f;
+		for (int k = 0; k < 4; ++k) {
+			denominator += wq[k] * v3_length_sq(g[k]);
+		}
+		float alpha_tilde = block->compliance[c] * inverse_h_squared;
+		denominator += alpha_tilde;
+		if (denominator < 1e-30f) {
+			continue;
+		}
+		float dlambda = (-C - alpha_tilde * block->lambda[c]) / denominator;
+		block->lambda[c] += dlambda;
+		for (int k = 0; k < 4; ++k) {
+			x[q[k]] = v3_mul_add(x[q[k]], wq[k] * dlambda, g[k]);
+		}
+	}
+}
+
+void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared)
+{
+	vec3 *x = particles->x;
+	const float *w = particles->w;
+	for (int c = 0; c < block->count; ++c) {
+		int i0 = block->triple[c][0], i1 = block->triple[c][1], i2 = block->triple[c][2];
+		float w0 = w[i0], w1 = w[i1], w2 = w[i2];
+		float denominator = 0.25f * w0 + w1 + 0.25f * w2;
+		if (denominator == 0.0f) {
+			continue;
+		}
+		vec3 offset = v3_sub(x[i1], v3_scale(v3_add(x[i0], x[i2]), 0.5f));
+		float length = v3_length(offset);
+		if (length < 1e-12f) {
+			continue;
+		}
+		float C = length - block->rest[c];
+		float alpha_tilde = block->compliance[c] * inverse_h_squared;
+		float dlambda = (-C - alpha_tilde * block->lambda[c]) / (denominator + alpha_tilde);
+		block->lambda[c] += dlambda;
+		vec3 n = v3_scale(offset, dlambda / length);
+		x[i0] = v3_mul_add(x[i0], -0.5f * w0, n);
+		x[i1] = v3_mul_add(x[i1], w1, n);
+		x[i2] = v3_mul_add(x[i2], -0.5f * w2, n);
+	}
+}
+
+float plait_distance_max_strain(const plait_distance_block *block, const plait_particles *particles)
+{
+	float worst = 0.0f;
+	for (int c = 0; c < block->count; ++c) {
+		float rest = block->rest[c];
+		if (rest <= 0.0f) {
+			continue;
+		}
+		float length = v3_length(v3_sub(particles->x[block->pair[c][1]], particles->x[block->pair[c][0]]));
+		float strain = fabsf(length / rest - 1.0f);
+		worst = strain > worst ? strain : worst;
+	}
+	return worst;
+}

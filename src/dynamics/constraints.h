@@ -1,0 +1,26 @@
+/* Constraint projection (XPBD: Macklin, Müller, Chentanez 2016). Each solve runs one
+ * Gauss-Seidel sweep over a block. With compliance alpha and multiplier lambda (reset each
+ * substep), one projection is
+ *     dlambda = (-C - alpha~ lambda) / (sum_i w_i |grad_i C|^2 + alpha~),  alpha~ = alpha / h^2,
+ *     x_i += w_i grad_i C dlambda,
+ * so the material's stiffness 1/alpha does not depend on how many iterations or substeps run
+ * (seed 000 §2.4: "the solver attempts to preserve the defined level of stretchiness"). */
+#ifndef PLAIT_DYNAMICS_CONSTRAINTS_H
+#define PLAIT_DYNAMICS_CONSTRAINTS_H
+
+#include "dynamics/sim.h"
+
+void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared);
+void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared);
+void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);
+
+/* Signed dihedral angle (radians, in (-pi, pi]) of the hinge p0-p1 with wings p2, p3: zero when
+ * flat, positive when the wings fold toward the side the normal of (p0, p1, p2) points to...
+ * see bend.c. Writes the gradient with respect to the four points when gradient != NULL;
+ * returns false when a triangle is degenerate. */
+bool plait_dihedral_angle(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float *angle, vec3 gradient[4]);
+
+/* Largest |length / rest - 1| over a distance block. */
+float plait_distance_max_strain(const plait_distance_block *block, const plait_particles *particles);
+
+#endif

@@ -1,0 +1,402 @@
+#include "dynamics/contact.h"
+
+#include <string.h>
+
+#include "collision/particle_hash.h"
+
+static plait_transform lerp_transform(plait_transform a, plait_transform b, float t)
+{
+	plait_transform r;
+	r.translate = v3_lerp(a.translate, b.translate, t);
+	r.rotate_deg = v3_lerp(a.rotate_deg, b.rotate_deg, t);
+	r.scale = a.scale + (b.scale - a.scale) * t;
+	return r;
+}
+
+void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
+{
+	for (int k = 0; k < sim->collider_count; ++k) {
+		plait_collider *c = &sim->colliders[k];
+		c->rigid_start = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t0));
+		c->rigid_end = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t1));
+	}
+}
+
+static float combined_friction(float a, float b)
+{
+	float friction = 0.5f * (a + b);
+	return friction > 1.0f ? 1.0f : friction;
+}
+
+/* Whether particles of materials a and b collide as a pair. Vertices of one cloth or curve do
+ * not collide with each other here: self-collision of meshes works on their triangles. */
+static bool materials_pair_up(const plait_material *a, const plait_material *b)
+{
+	if (!a->collide || !b->collide) {
+		return false;
+	}
+	if (a->object != b->object) {
+		return true;
+	}
+	return a->type == PLAIT_OBJECT_PARTICLES && a->self_collide;
+}
+
+bool plait_contacts_begin_substep(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		p->flags[i] &= (uint8_t)~PLAIT_PARTICLE_CONTACT;
+	}
+	sim->pair_contact_count = 0;
+
+	/* Particle pairs are needed when two colliding objects hold particles, or a particle object
+	 * collides with itself. */
+	int colliding_objects = 0, last_object = -1;
+	bool self_pairs = false;
+	for (int m = 0; m < sim->material_count; ++m) {
+		const plait_material *mat = &sim->materials[m];
+		if (!mat->collide || mat->type == PLAIT_OBJECT_COLLIDER) {
+			continue;
+		}
+		if (mat->object != last_object) {
+			++colliding_objects;
+			last_object = mat->object;
+		}
+		self_pairs = self_pairs || (mat->type == PLAIT_OBJECT_PARTICLES && mat->self_collide);
+	}
+	sim->particle_pairs_active = colliding_objects >= 2 || self_pairs;
+	if (!sim->particle_pairs_active) {
+		return true;
+	}
+	if (sim->hash == NULL) {
+		sim->hash = plait_alloc_zero(&sim->allocator, 1, sizeof(plait_particle_hash));
+		if (sim->hash == NULL) {
+			return false;
+		}
+	}
+	if (sim->pair_list_capacity < p->count) {
+		plait_free(&sim->allocator, sim->pair_list);
+		sim->pair_list = plait_alloc_zero(&sim->allocator, (size_t)p->count, sizeof(int));
+		sim->pair_list_capacity = sim->pair_list == NULL ? 0 : p->count;
+		if (sim->pair_list == NULL) {
+			return false;
+		}
+	}
+	return true;
+}
+
+static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3 surface_velocity, float bounce,
+                                    float stickiness)
+{
+	p->flags[i] |= PLAIT_PARTICLE_CONTACT;
+	p->contact_normal[i] = normal;
+	p->contact_velocity[i] = surface_velocity;
+	p->contact_bounce[i] = bounce;
+	p->contact_stickiness[i] = stickiness;
+}
+
+static int collide_with_collider(plait_sim *sim, const plait_collider *c)
+{
+	plait_particles *p = &sim->particles;
+	const plait_rigid *r0 = &c->rigid_start, *r1 = &c->rigid_end;
+	float inverse_scale = 1.0f / r1->scale;
+	float inverse_h = 1.0f / sim->substep_time;
+	int contacts = 0;
+	for (int i = 0; i < p->count; ++i) {
+		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->w[i] == 0.0f) {
+			continue;
+		}
+		const plait_material *mat = &sim->materials[p->material[i]];
+		/* Everything in the collider's own space: there the collider stands still and the
+		 * particle moves along a straight line from p0 to p1. */
+		vec3 p0 = plait_rigid_apply_inverse(r0, p->x_prev[i]);
+		vec3 p1 = plait_rigid_apply_inverse(r1, p->x[i]);
+		float radius = (p->radius[i] + c->thickness) * inverse_scale;
+		float toi;
+		if (!plait_shape_sweep(&c->shape, p0, p1, radius, &toi)) {
+			continue;
+		}
+		vec3 hit = v3_lerp(p0, p1, toi);
+		vec3 normal;
+		float distance = plait_shape_distance(&c->shape, hit, &normal);
+		if (toi == 0.0f && distance < radius) {
+			/* Started inside the thickened shape (trapped): push out along the normal at the
+			 * end position instead, which for the convex shapes here leads straight out. */
+			distance = plait_shape_distance(&c->shape, p1, &normal);
+			hit = p1;
+		}
+		vec3 surface = v3_mul_add(hit, -distance, normal);
+		float depth = radius - v3_dot(v3_sub(p1, surface), normal);
+		vec3 surface_world = plait_rigid_apply(r1, surface);
+		vec3 surface_velocity = v3_scale(v3_sub(surface_world, plait_rigid_apply(r0, surface)), inverse_h);
+		vec3 normal_world = plait_rigid_rotate(r1, normal);
+		float bounce = 0.5f * (mat->bounce + c->bounce);
+		float stickiness = 0.5f * (mat->stickiness + c->stickiness);
+		if (depth <= 0.0f) {
+			/* Touching within the tolerance of the sweep but not inside: still a contact for
+			 * restitution and stickiness, no correction. */
+			record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
+			continue;
+		}
+		vec3 corrected = v3_mul_add(p1, depth, normal);
+		/* Coulomb friction on the substep's tangential displacement relative to the collider. */
+		vec3 motion = v3_sub(p1, p0);
+		vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
+		float tangential_length = v3_length(tangential);
+		float friction = combined_friction(mat->friction, c->friction);
+		if (tangential_length > 0.0f && friction > 0.0f) {
+			float limit = friction * depth;
+			float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
+			corrected = v3_mul_add(corrected, -removed, tangential);
+		}
+		p->x[i] = plait_rigid_apply(r1, corrected);
+		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
+		++contacts;
+	}
+	return contacts;
+}
+
+/* Earliest t in [0, 1] at which |d0 + t (d1 - d0)| <= distance; false if never. */
+static bool sweep_pair(vec3 d0, vec3 d1, float distance, float *toi)
+{
+	float c = v3_length_sq(d0) - distance * distance;
+	if (c <= 0.0f) {
+		*toi = 0.0f;
+		return true;
+	}
+	vec3 e = v3_sub(d1, d0);
+	float a = v3_length_sq(e);
+	float b = v3_dot(d0, e);
+	if (a <= 0.0f || b >= 0.0f) {
+		return false;
+	}
+	float discriminant = b * b - a * c;
+	if (discriminant < 0.0f) {
+		return false;
+	}
+	float t = (-b - sqrtf(discriminant)) / a;
+	if (t > 1.0f) {
+		return false;
+	}
+	*toi = t < 0.0f ? 0.0f : t;
+	return true;
+}
+
+static int collide_pair(plait_sim *sim, int i, int j)
+{
+	plait_particles *p = &sim->particles;
+	float w_sum = p->w[i] + p->w[j];
+	if (w_sum == 0.0f) {
+		return 0;
+	}
+	float distance = p->radius[i] + p->radius[j];
+	vec3 d0 = v3_sub(p->x_prev[j], p->x_prev[i]);
+	vec3 d1 = v3_sub(p->x[j], p->x[i]);
+	float toi;
+	if (!sweep_pair(d0, d1, distance, &toi)) {
+		return 0;
+	}
+	vec3 at_contact = v3_lerp(d0, d1, toi);
+	vec3 normal = v3_normalize(toi > 0.0f ? at_contact : d1);
+	if (v3_length_sq(normal) == 0.0f) {
+		normal = v3(0.0f, 1.0f, 0.0f);
+	}
+	float depth = distance - v3_dot(d1, normal);
+	if (depth <= 0.0f) {
+		return 0;
+	}
+	const plait_material *mi = &sim->materials[p->material[i]];
+	const plait_material *mj = &sim->materials[p->material[j]];
+	float wi = p->w[i] / w_sum, wj = p->w[j] / w_sum;
+	vec3 correction = v3_scale(normal, depth);
+	/* Friction on the relative tangential displacement of the substep. */
+	vec3 motion = v3_sub(d1, d0);
+	vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
+	float tangential_length = v3_length(tangential);
+	float friction = combined_friction(mi->friction, mj->friction);
+	if (tangential_length > 0.0f && friction > 0.0f) {
+		float limit = friction * depth;
+		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
+		correction = v3_mul_add(correction, -removed, tangential);
+	}
+	p->x[i] = v3_mul_add(p->x[i], -wi, correction);
+	p->x[j] = v3_mul_add(p->x[j], wj, correction);
+
+	if (sim->pair_contact_count < sim->pair_contact_capacity) {
+		plait_particle_contact *contact = &sim->pair_contacts[sim->pair_contact_count++];
+		contact->i = i;
+		contact->j = j;
+		contact->normal = normal;
+		contact->approach_speed = v3_dot(v3_sub(p->v_pre[j], p->v_pre[i]), normal);
+		contact->bounce = 0.5f * (mi->bounce + mj->bounce);
+	}
+	return 1;
+}
+
+static bool ensure_pair_contacts(plait_sim *sim)
+{
+	int wanted = sim->pair_contact_count + sim->particles.count;
+	if (sim->pair_contact_capacity >= wanted) {
+		return true;
+	}
+	int capacity = wanted * 2;
+	plait_particle_contact *bigger = plait_alloc_zero(&sim->allocator, (size_t)capacity, sizeof *bigger);
+	if (bigger == NULL) {
+		return false;
+	}
+	if (sim->pair_contact_count > 0) {
+		memcpy(bigger, sim->pair_contacts, sizeof *bigger * (size_t)sim->pair_contact_count);
+	}
+	plait_free(&sim->allocator, sim->pair_contacts);
+	sim->pair_contacts = bigger;
+	sim->pair_contact_capacity = capacity;
+	return true;
+}
+
+static int collide_particle_pairs(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	plait_particle_hash *hash = sim->hash;
+	int count = 0;
+	float max_radius = 0.0f, max_motion = 0.0f;
+	for (int i = 0; i < p->count; ++i) {
+		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE)) {
+			continue;
+		}
+		sim->pair_list[count++] = i;
+		max_radius = fmaxf(max_radius, p->radius[i]);
+		max_motion = fmaxf(max_motion, v3_length(v3_sub(p->x[i], p->x_prev[i])));
+	}
+	if (count < 2) {
+		return 0;
+	}
+	/* Two particles that touch at any time in the substep are, at its end, at most
+	 * 2 max_radius + 2 max_motion apart: with cells that large, neighbours suffice. */
+	float cell = 2.0f * max_radius + 2.0f * max_motion;
+	if (!(cell > 0.0f)) {
+		return 0;
+	}
+	if (!plait_particle_hash_build(hash, &sim->allocator, p->x, sim->pair_list, count, cell)) {
+		return 0;
+	}
+	if (!ensure_pair_contacts(sim)) {
+		return 0;
+	}
+	int contacts = 0;
+	for (int k = 0; k < count; ++k) {
+		int i = sim->pair_list[k];
+		const plait_material *mi = &sim->materials[p->material[i]];
+		plait_hash_cell home = hash->particle_cell[k];
+		for (int dz = -1; dz <= 1; ++dz) {
+			for (int dy = -1; dy <= 1; ++dy) {
+				for (int dx = -1; dx <= 1; ++dx) {
+					plait_hash_cell cell_key = {home.x + dx, home.y + dy, home.z + dz};
+					int bucket = plait_particle_hash_bucket(hash, cell_key);
+					for (int e = hash->bucket_start[bucket]; e < hash->bucket_start[bucket + 1]; ++e) {
+						int j = hash->entry_particle[e];
+						plait_hash_cell c = hash->entry_cell[e];
+						if (j <= i || c.x != cell_key.x || c.y != cell_key.y || c.z != cell_key.z) {
+							continue;
+						}
+						if (!materials_pair_up(mi, &sim->materials[p->material[j]])) {
+							continue;
+						}
+						contacts += collide_pair(sim, i, j);
+					}
+				}
+			}
+		}
+	}
+	return contacts;
+}
+
+void plait_collide(plait_sim *sim)
+{
+	int contacts = 0;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		if (sim->colliders[k].collide) {
+			contacts += collide_with_collider(sim, &sim->colliders[k]);
+		}
+	}
+	if (sim->particle_pairs_active) {
+		contacts += collide_particle_pairs(sim);
+	}
+	sim->contacts += contacts;
+}
+
+void plait_contacts_end_substep(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	/* Below this approach speed a contact is resting, not bouncing: gravity's pull over two
+	 * substeps, so resting particles do not jitter. */
+	float resting_speed = 2.0f * v3_length(sim->settings.gravity) * sim->substep_time + 1e-6f;
+	for (int i = 0; i < p->count; ++i) {
+		if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) || p->w[i] == 0.0f) {
+			continue;
+		}
+		vec3 n = p->contact_normal[i];
+		vec3 surface_velocity = p->contact_velocity[i];
+		float approach = v3_dot(v3_sub(p->v_pre[i], surface_velocity), n);
+		float normal_speed = v3_dot(v3_sub(p->v[i], surface_velocity), n);
+		float bounce = p->contact_bounce[i];
+		if (bounce > 0.0f && approach < -resting_speed) {
+			float target = -bounce * approach;
+			if (normal_speed < target) {
+				p->v[i] = v3_mul_add(p->v[i], target - normal_speed, n);
+				normal_speed = target;
+			}
+		} else if (normal_speed > 0.0f && p->contact_stickiness[i] > 0.0f) {
+			p->v[i] = v3_mul_add(p->v[i], -normal_speed * p->contact_stickiness[i], n);
+		}
+	}
+	for (int c = 0; c < sim->pair_contact_count; ++c) {
+		const plait_particle_contact *contact = &sim->pair_contacts[c];
+		int i = contact->i, j = contact->j;
+		float w_sum = p->w[i] + p->w[j];
+		if (w_sum == 0.0f || contact->bounce <= 0.0f || contact->approach_speed >= -resting_speed) {
+			continue;
+		}
+		float normal_speed = v3_dot(v3_sub(p->v[j], p->v[i]), contact->normal);
+		float target = -contact->bounce * contact->approach_speed;
+		if (normal_speed >= target) {
+			continue;
+		}
+		/* Equal and opposite impulses: momentum is conserved. */
+		vec3 impulse = v3_scale(contact->normal, (target - normal_speed) / w_sum);
+		p->v[i] = v3_mul_add(p->v[i], -p->w[i], impulse);
+		p->v[j] = v3_mul_add(p->v[j], p->w[j], impulse);
+	}
+}
+
+int plait_count_penetrations(const plait_sim *sim)
+{
+	const plait_particles *p = &sim->particles;
+	int count = 0;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (!c->collide) {
+			continue;
+		}
+		plait_rigid r = plait_rigid_from_transform(c->transform_end);
+		for (int i = 0; i < p->count; ++i) {
+			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE)) {
+				continue;
+			}
+			vec3 normal;
+			float distance = plait_shape_distance(&c->shape, plait_rigid_apply_inverse(&r, p->x[i]), &normal) * r.scale;
+			if (distance < -(1e-4f + 0.01f * p->radius[i])) {
+				++count;
+			}
+		}
+	}
+	return count;
+}
+
+void plait_contacts_destroy(plait_sim *sim)
+{
+	if (sim->hash != NULL) {
+		plait_particle_hash_destroy(sim->hash, &sim->allocator);
+		plait_free(&sim->allocator, sim->hash);
+		sim->hash = NULL;
+	}
+}

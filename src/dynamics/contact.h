@@ -1,0 +1,35 @@
+/* The collision kind (paper §7): run as the last kind of every substep by the scheduler, with
+ * as many iterations as max_collision_iterations asks (never fewer than the substeps).
+ *
+ * Each iteration tests, for every colliding particle, the motion from its position at the start
+ * of the substep to its current iterate (the space-time path) against every collider moving
+ * from its start-of-substep to its end-of-substep transform, and against nearby particles of
+ * other objects (and of the same particle object when it self-collides). A hit projects the
+ * current position back to the contact surface (inverse-mass weighted between particles),
+ * applies Coulomb friction to the tangential displacement of the substep, and records the
+ * contact; after the substep's velocity update, restitution (bounce) and stickiness act on the
+ * recorded contacts. Friction, stickiness and bounce of a contact are the averages of the two
+ * surfaces; friction is clipped at 1 (seed 000 §5.5). */
+#ifndef PLAIT_DYNAMICS_CONTACT_H
+#define PLAIT_DYNAMICS_CONTACT_H
+
+#include "dynamics/sim.h"
+
+/* Interpolates the collider transforms for the substep [t0, t1] (fractions of the frame). */
+void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1);
+
+/* Clears the contact records of the substep and decides which particles pair up. */
+bool plait_contacts_begin_substep(plait_sim *sim);
+
+/* One collision iteration. */
+void plait_collide(plait_sim *sim);
+
+/* Restitution and stickiness on the contacts of the substep (after v = (x - x_prev) / h). */
+void plait_contacts_end_substep(plait_sim *sim);
+
+/* Vertices deeper than a tolerance inside any collider, at the current positions. */
+int plait_count_penetrations(const plait_sim *sim);
+
+void plait_contacts_destroy(plait_sim *sim);
+
+#endif

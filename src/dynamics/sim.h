@@ -1,0 +1,166 @@
+/* The simulation state of one world: one particle store for every object (paper §4: the
+ * dynamics of a simplicial complex is the motion of its vertices), constraint blocks that refer
+ * to particles by world index (so a constraint can join two objects), colliders and settings.
+ * The world layer (world/) owns a plait_sim and maps objects onto ranges of it. */
+#ifndef PLAIT_DYNAMICS_SIM_H
+#define PLAIT_DYNAMICS_SIM_H
+
+#include <stdint.h>
+
+#include "collision/shape.h"
+#include "core/alloc.h"
+#include "dynamics/schedule.h"
+
+enum {
+	PLAIT_PARTICLE_PINNED = 1,  /* kinematic: follows pin_start -> pin_end over the frame */
+	PLAIT_PARTICLE_COLLIDE = 2, /* takes part in collisions */
+	PLAIT_PARTICLE_CONTACT = 4, /* touched something in the current substep */
+};
+
+/* Per-object attributes the solver needs per particle (indexed by particles.material). */
+typedef struct plait_material {
+	int object;         /* owning object slot */
+	plait_object_type type;
+	float thickness;    /* scene units */
+	float friction;
+	float stickiness;
+	float bounce;
+	float damp;         /* 1/s */
+	float point_drag;   /* curves and particles: drag coefficient of each vertex */
+	float point_area;   /* m^2: cross-section used with point_drag */
+	float drag, tangential_drag, lift; /* cloth triangles */
+	bool collide;
+	bool self_collide;  /* loose particles of this object collide with each other */
+} plait_material;
+
+/* Structure of arrays: one entry per particle of every object. */
+typedef struct plait_particles {
+	int count, capacity;
+	vec3 *x;      /* position, scene units */
+	vec3 *x_prev; /* position at the start of the current substep */
+	vec3 *v;      /* velocity, scene units per second */
+	vec3 *v_pre;  /* velocity after external forces, before constraints (restitution) */
+	float *w;     /* inverse mass, 1/kg; 0 = pinned */
+	float *mass;  /* kg, kept while pinned */
+	float *radius;/* collision radius, scene units */
+	int *material;
+	uint8_t *flags;
+	vec3 *pin_start, *pin_end; /* pin targets at frame start and end */
+	vec3 *contact_normal;      /* world normal of the last contact in this substep */
+	vec3 *contact_velocity;    /* velocity of the touched surface */
+	float *contact_bounce, *contact_stickiness;
+	float *drag_matrix;        /* 6 per particle: symmetric implicit air drag (kg/s) */
+	vec3 *air_force;           /* explicit air force (N in scene units) */
+	vec3 *x_frame, *v_frame;   /* state at the start of the frame, restored if it fails */
+} plait_particles;
+
+/* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
+ * direction: when longer than rest, compliance_tension; when shorter, compliance_compression;
+ * INFINITY means no resistance that way. */
+typedef struct plait_distance_block {
+	int count, capacity;
+	int (*pair)[2];
+	float *rest;
+	float *compliance_tension;
+	float *compliance_compression;
+	float *lambda;
+} plait_distance_block;
+
+/* Signed dihedral angle across an edge (p0, p1) between wings p2 and p3 (cloth bend). */
+typedef struct plait_bend_block {
+	int count, capacity;
+	int (*quad)[4];
+	float *rest_angle;
+	float *compliance;
+	float *lambda;
+} plait_bend_block;
+
+/* Curve bend: distance of p1 from the midpoint of p0 and p2 (zero for a straight rest). */
+typedef struct plait_rod_bend_block {
+	int count, capacity;
+	int (*triple)[3];
+	float *rest;
+	float *compliance;
+	float *lambda;
+} plait_rod_bend_block;
+
+/* Cloth triangles that feel the air. */
+typedef struct plait_aero_block {
+	int count, capacity;
+	int (*triangle)[3];
+	int *material;
+} plait_aero_block;
+
+typedef struct plait_collider {
+	int object;
+	plait_shape shape;
+	plait_transform transform_start, transform_end; /* keyframes at frame start and end */
+	plait_rigid rigid_start, rigid_end;             /* interpolated, current substep */
+	float thickness, friction, stickiness, bounce;
+	bool collide;
+} plait_collider;
+
+typedef struct plait_particle_contact {
+	int i, j;
+	vec3 normal; /* from i to j */
+	float approach_speed; /* relative normal velocity before the substep (negative: closing) */
+	float bounce;
+} plait_particle_contact;
+
+/* Built-in constraint kinds; their names are what plait explain prints. */
+typedef enum plait_kind {
+	PLAIT_KIND_STRETCH = 0,
+	PLAIT_KIND_SHEAR,
+	PLAIT_KIND_BEND,
+	PLAIT_KIND_COLLISION,
+	PLAIT_KIND_COUNT
+} plait_kind;
+
+typedef struct plait_settings {
+	float fps, time_scale, space_scale;
+	int substeps, max_collision_iterations;
+	vec3 gravity;     /* scene units / s^2 */
+	float air_density;
+	vec3 wind_velocity; /* scene units / s */
+	float wind_noise;
+	uint32_t seed;
+} plait_settings;
+
+typedef struct plait_sim {
+	plait_allocator allocator;
+	plait_settings settings;
+	plait_particles particles;
+	int material_count, material_capacity;
+	plait_material *materials;
+	plait_distance_block stretch, shear;
+	plait_bend_block bend;
+	plait_rod_bend_block rod_bend;
+	plait_aero_block aero;
+	int collider_count, collider_capacity;
+	plait_collider *colliders;
+
+	/* Importance per kind, and whether it has work; the schedule is rebuilt when they change. */
+	int kind_importance[PLAIT_KIND_COUNT];
+	bool kind_active[PLAIT_KIND_COUNT];
+	int schedule_kinds[PLAIT_KIND_COUNT]; /* schedule kind index -> plait_kind */
+	plait_schedule schedule;
+	bool schedule_dirty;
+
+	/* Scratch of the particle-pair stage (spatial hash and contacts). */
+	bool particle_pairs_active;
+	int pair_contact_count, pair_contact_capacity;
+	plait_particle_contact *pair_contacts;
+	void *hash; /* plait_particle_hash, owned by contact.c */
+	int *pair_list; /* particles taking part in particle-pair collisions */
+	int pair_list_capacity;
+
+	int frame;
+	double time; /* seconds simulated */
+	float substep_time; /* h, seconds */
+	int substep; /* current substep in the frame */
+	/* Per-frame counters. */
+	int contacts;
+	int constraint_solves;
+} plait_sim;
+
+#endif

@@ -1,0 +1,349 @@
+#include "dynamics/sim_store.h"
+
+#include <string.h>
+
+/* Replaces *array (count_used elements of element_size) with a larger copy of new_capacity. */
+static bool grow_array(const plait_allocator *allocator, void **array, size_t element_size, int count_used,
+                       int new_capacity)
+{
+	void *bigger = plait_alloc_zero(allocator, (size_t)new_capacity, element_size);
+	if (bigger == NULL) {
+		return false;
+	}
+	if (*array != NULL && count_used > 0) {
+		memcpy(bigger, *array, (size_t)count_used * element_size);
+	}
+	plait_free(allocator, *array);
+	*array = bigger;
+	return true;
+}
+
+static int next_capacity(int capacity, int needed)
+{
+	int grown = capacity < 16 ? 16 : capacity + capacity / 2;
+	return grown > needed ? grown : needed;
+}
+
+void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
+{
+	memset(sim, 0, sizeof *sim);
+	sim->allocator = *allocator;
+	sim->schedule_dirty = true;
+}
+
+#define FREE_FIELD(object, field) plait_free(&sim->allocator, (object).field)
+
+static void free_particles(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	void *fields[] = {p->x,         p->x_prev,         p->v,
+	                  p->v_pre,     p->w,              p->mass,
+	                  p->radius,    p->material,       p->flags,
+	                  p->pin_start, p->pin_end,        p->contact_normal,
+	                  p->contact_velocity, p->contact_bounce, p->contact_stickiness,
+	                  p->drag_matrix, p->air_force, p->x_frame, p->v_frame};
+	for (size_t k = 0; k < sizeof fields / sizeof fields[0]; ++k) {
+		plait_free(&sim->allocator, fields[k]);
+	}
+}
+
+static void free_distance(plait_sim *sim, plait_distance_block *b)
+{
+	FREE_FIELD(*b, pair);
+	FREE_FIELD(*b, rest);
+	FREE_FIELD(*b, compliance_tension);
+	FREE_FIELD(*b, compliance_compression);
+	FREE_FIELD(*b, lambda);
+}
+
+void plait_sim_destroy(plait_sim *sim)
+{
+	free_particles(sim);
+	free_distance(sim, &sim->stretch);
+	free_distance(sim, &sim->shear);
+	FREE_FIELD(sim->bend, quad);
+	FREE_FIELD(sim->bend, rest_angle);
+	FREE_FIELD(sim->bend, compliance);
+	FREE_FIELD(sim->bend, lambda);
+	FREE_FIELD(sim->rod_bend, triple);
+	FREE_FIELD(sim->rod_bend, rest);
+	FREE_FIELD(sim->rod_bend, compliance);
+	FREE_FIELD(sim->rod_bend, lambda);
+	FREE_FIELD(sim->aero, triangle);
+	FREE_FIELD(sim->aero, material);
+	plait_free(&sim->allocator, sim->materials);
+	plait_free(&sim->allocator, sim->colliders);
+	plait_free(&sim->allocator, sim->pair_contacts);
+	plait_free(&sim->allocator, sim->pair_list);
+	plait_schedule_destroy(&sim->schedule, &sim->allocator);
+	/* The particle hash is owned by the contact stage and freed there. */
+}
+
+bool plait_sim_reserve_particles(plait_sim *sim, int count)
+{
+	plait_particles *p = &sim->particles;
+	int needed = p->count + count;
+	if (needed <= p->capacity) {
+		return true;
+	}
+	int capacity = next_capacity(p->capacity, needed);
+	const plait_allocator *a = &sim->allocator;
+	int n = p->count;
+	bool ok = grow_array(a, (void **)&p->x, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->x_prev, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->v, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->v_pre, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->w, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->mass, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->radius, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->material, sizeof(int), n, capacity) &&
+	          grow_array(a, (void **)&p->flags, sizeof(uint8_t), n, capacity) &&
+	          grow_array(a, (void **)&p->pin_start, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->pin_end, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->contact_normal, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->contact_velocity, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->contact_bounce, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->contact_stickiness, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->drag_matrix, 6 * sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->air_force, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->x_frame, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->v_frame, sizeof(vec3), n, capacity);
+	if (ok) {
+		p->capacity = capacity;
+	}
+	return ok;
+}
+
+bool plait_sim_reserve_distance(plait_sim *sim, plait_distance_block *b, int count)
+{
+	int needed = b->count + count;
+	if (needed <= b->capacity) {
+		return true;
+	}
+	int capacity = next_capacity(b->capacity, needed);
+	const plait_allocator *a = &sim->allocator;
+	bool ok = grow_array(a, (void **)&b->pair, sizeof *b->pair, b->count, capacity) &&
+	          grow_array(a, (void **)&b->rest, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->compliance_tension, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->compliance_compression, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->lambda, sizeof(float), b->count, capacity);
+	if (ok) {
+		b->capacity = capacity;
+	}
+	return ok;
+}
+
+bool plait_sim_reserve_bend(plait_sim *sim, int count)
+{
+	plait_bend_block *b = &sim->bend;
+	int needed = b->count + count;
+	if (needed <= b->capacity) {
+		return true;
+	}
+	int capacity = next_capacity(b->capacity, needed);
+	const plait_allocator *a = &sim->allocator;
+	bool ok = grow_array(a, (void **)&b->quad, sizeof *b->quad, b->count, capacity) &&
+	          grow_array(a, (void **)&b->rest_angle, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->compliance, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->lambda, sizeof(float), b->count, capacity);
+	if (ok) {
+		b->capacity = capacity;
+	}
+	return ok;
+}
+
+bool plait_sim_reserve_rod_bend(plait_sim *sim, int count)
+{
+	plait_rod_bend_block *b = &sim->rod_bend;
+	int needed = b->count + count;
+	if (needed <= b->capacity) {
+		return true;
+	}
+	int capacity = next_capacity(b->capacity, needed);
+	const plait_allocator *a = &sim->allocator;
+	bool ok = grow_array(a, (void **)&b->triple, sizeof *b->triple, b->count, capacity) &&
+	          grow_array(a, (void **)&b->rest, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->compliance, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->lambda, sizeof(float), b->count, capacity);
+	if (ok) {
+		b->capacity = capacity;
+	}
+	return ok;
+}
+
+bool plait_sim_reserve_aero(plait_sim *sim, int count)
+{
+	plait_aero_block *b = &sim->aero;
+	int needed = b->count + count;
+	if (needed <= b->capacity) {
+		return true;
+	}
+	int capacity = next_capacity(b->capacity, needed);
+	const plait_allocator *a = &sim->allocator;
+	bool ok = grow_array(a, (void **)&b->triangle, sizeof *b->triangle, b->count, capacity) &&
+	          grow_array(a, (void **)&b->material, sizeof(int), b->count, capacity);
+	if (ok) {
+		b->capacity = capacity;
+	}
+	return ok;
+}
+
+bool plait_sim_reserve_materials(plait_sim *sim, int count)
+{
+	int needed = sim->material_count + count;
+	if (needed <= sim->material_capacity) {
+		return true;
+	}
+	int capacity = next_capacity(sim->material_capacity, needed);
+	if (!grow_array(&sim->allocator, (void **)&sim->materials, sizeof *sim->materials, sim->material_count,
+	                capacity)) {
+		return false;
+	}
+	sim->material_capacity = capacity;
+	return true;
+}
+
+bool plait_sim_reserve_colliders(plait_sim *sim, int count)
+{
+	int needed = sim->collider_count + count;
+	if (needed <= sim->collider_capacity) {
+		return true;
+	}
+	int capacity = next_capacity(sim->collider_capacity, needed);
+	if (!grow_array(&sim->allocator, (void **)&sim->colliders, sizeof *sim->colliders, sim->collider_count,
+	                capacity)) {
+		return false;
+	}
+	sim->collider_capacity = capacity;
+	return true;
+}
+
+int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float mass, float radius, int material,
+                           uint8_t flags)
+{
+	plait_particles *p = &sim->particles;
+	int i = p->count++;
+	p->x[i] = position;
+	p->x_prev[i] = position;
+	p->v[i] = velocity;
+	p->v_pre[i] = velocity;
+	p->mass[i] = mass;
+	p->w[i] = (flags & PLAIT_PARTICLE_PINNED) ? 0.0f : 1.0f / mass;
+	p->radius[i] = radius;
+	p->material[i] = material;
+	p->flags[i] = flags;
+	p->pin_start[i] = position;
+	p->pin_end[i] = position;
+	return i;
+}
+
+void plait_sim_add_distance(plait_distance_block *b, int i, int j, float rest, float compliance_tension,
+                            float compliance_compression)
+{
+	int c = b->count++;
+	b->pair[c][0] = i;
+	b->pair[c][1] = j;
+	b->rest[c] = rest;
+	b->compliance_tension[c] = compliance_tension;
+	b->compliance_compression[c] = compliance_compression;
+	b->lambda[c] = 0.0f;
+}
+
+static void compact_distance(plait_distance_block *b, const int *remap)
+{
+	int kept = 0;
+	for (int c = 0; c < b->count; ++c) {
+		int i = remap[b->pair[c][0]], j = remap[b->pair[c][1]];
+		if (i < 0 || j < 0) {
+			continue;
+		}
+		b->pair[kept][0] = i;
+		b->pair[kept][1] = j;
+		b->rest[kept] = b->rest[c];
+		b->compliance_tension[kept] = b->compliance_tension[c];
+		b->compliance_compression[kept] = b->compliance_compression[c];
+		b->lambda[kept] = 0.0f;
+		++kept;
+	}
+	b->count = kept;
+}
+
+bool plait_sim_compact(plait_sim *sim, const bool *keep)
+{
+	plait_particles *p = &sim->particles;
+	int *remap = plait_alloc_zero(&sim->allocator, (size_t)(p->count > 0 ? p->count : 1), sizeof(int));
+	if (remap == NULL) {
+		return false;
+	}
+	int kept = 0;
+	for (int i = 0; i < p->count; ++i) {
+		if (!keep[i]) {
+			remap[i] = -1;
+			continue;
+		}
+		remap[i] = kept;
+		p->x[kept] = p->x[i];
+		p->x_prev[kept] = p->x_prev[i];
+		p->v[kept] = p->v[i];
+		p->v_pre[kept] = p->v_pre[i];
+		p->w[kept] = p->w[i];
+		p->mass[kept] = p->mass[i];
+		p->radius[kept] = p->radius[i];
+		p->material[kept] = p->material[i];
+		p->flags[kept] = p->flags[i];
+		p->pin_start[kept] = p->pin_start[i];
+		p->pin_end[kept] = p->pin_end[i];
+		++kept;
+	}
+	p->count = kept;
+	compact_distance(&sim->stretch, remap);
+	compact_distance(&sim->shear, remap);
+
+	plait_bend_block *bend = &sim->bend;
+	int bend_kept = 0;
+	for (int c = 0; c < bend->count; ++c) {
+		int q[4];
+		bool alive = true;
+		for (int k = 0; k < 4; ++k) {
+			q[k] = remap[bend->quad[c][k]];
+			alive = alive && q[k] >= 0;
+		}
+		if (!alive) {
+			continue;
+		}
+		memcpy(bend->quad[bend_kept], q, sizeof q);
+		bend->rest_angle[bend_kept] = bend->rest_angle[c];
+		bend->compliance[bend_kept] = bend->compliance[c];
+		++bend_kept;
+	}
+	bend->count = bend_kept;
+
+	plait_rod_bend_block *rod = &sim->rod_bend;
+	int rod_kept = 0;
+	for (int c = 0; c < rod->count; ++c) {
+		int t[3] = {remap[rod->triple[c][0]], remap[rod->triple[c][1]], remap[rod->triple[c][2]]};
+		if (t[0] < 0 || t[1] < 0 || t[2] < 0) {
+			continue;
+		}
+		memcpy(rod->triple[rod_kept], t, sizeof t);
+		rod->rest[rod_kept] = rod->rest[c];
+		rod->compliance[rod_kept] = rod->compliance[c];
+		++rod_kept;
+	}
+	rod->count = rod_kept;
+
+	plait_aero_block *aero = &sim->aero;
+	int aero_kept = 0;
+	for (int c = 0; c < aero->count; ++c) {
+		int t[3] = {remap[aero->triangle[c][0]], remap[aero->triangle[c][1]], remap[aero->triangle[c][2]]};
+		if (t[0] < 0 || t[1] < 0 || t[2] < 0) {
+			continue;
+		}
+		memcpy(aero->triangle[aero_kept], t, sizeof t);
+		aero->material[aero_kept] = aero->material[c];
+		++aero_kept;
+	}
+	aero->count = aero_kept;
+	plait_free(&sim->allocator, remap);
+	return true;
+}

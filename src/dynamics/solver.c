@@ -1,0 +1,187 @@
+#include "dynamics/solver.h"
+
+#include <string.h>
+
+#include "core/error.h"
+#include "dynamics/air.h"
+#include "dynamics/constraints.h"
+#include "dynamics/contact.h"
+
+const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "collision"};
+
+/* Order of each kind within a position: stretch first, collisions last (paper §6, Fig. 10). */
+static const int kind_order[PLAIT_KIND_COUNT] = {10, 20, 30, 100};
+
+plait_result plait_sim_update_schedule(plait_sim *sim, plait_error *error)
+{
+	if (!sim->schedule_dirty) {
+		return PLAIT_OK;
+	}
+	plait_kind_desc kinds[PLAIT_KIND_COUNT];
+	int count = 0;
+	for (int k = 0; k < PLAIT_KIND_COUNT; ++k) {
+		if (!sim->kind_active[k]) {
+			continue;
+		}
+		int importance = k == PLAIT_KIND_COLLISION ? sim->settings.max_collision_iterations : sim->kind_importance[k];
+		kinds[count] = (plait_kind_desc){plait_kind_names[k], kind_order[k], importance};
+		sim->schedule_kinds[count] = k;
+		++count;
+	}
+	plait_schedule_destroy(&sim->schedule, &sim->allocator);
+	plait_result result =
+	    plait_schedule_build(&sim->schedule, &sim->allocator, sim->settings.substeps, kinds, count, error);
+	if (result == PLAIT_OK) {
+		sim->schedule_dirty = false;
+	}
+	return result;
+}
+
+static void reset_multipliers(plait_sim *sim)
+{
+	memset(sim->stretch.lambda, 0, sizeof(float) * (size_t)sim->stretch.count);
+	memset(sim->shear.lambda, 0, sizeof(float) * (size_t)sim->shear.count);
+	memset(sim->bend.lambda, 0, sizeof(float) * (size_t)sim->bend.count);
+	memset(sim->rod_bend.lambda, 0, sizeof(float) * (size_t)sim->rod_bend.count);
+}
+
+/* Start of a substep: pinned particles move to their interpolated targets, free ones to
+ * their predicted positions x + h v. */
+static void predict_positions(plait_sim *sim, float h, float t_end)
+{
+	plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		p->x_prev[i] = p->x[i];
+		p->v_pre[i] = p->v[i];
+		if (p->w[i] == 0.0f) {
+			p->x[i] = v3_lerp(p->pin_start[i], p->pin_end[i], t_end);
+		} else {
+			p->x[i] = v3_mul_add(p->x[i], h, p->v[i]);
+		}
+	}
+}
+
+static void update_velocities(plait_sim *sim, float h)
+{
+	plait_particles *p = &sim->particles;
+	float inverse_h = 1.0f / h;
+	for (int i = 0; i < p->count; ++i) {
+		p->v[i] = v3_scale(v3_sub(p->x[i], p->x_prev[i]), inverse_h);
+	}
+}
+
+static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared)
+{
+	switch (kind) {
+	case PLAIT_KIND_STRETCH:
+		plait_solve_distance(&sim->stretch, &sim->particles, inverse_h_squared);
+		sim->constraint_solves += sim->stretch.count;
+		break;
+	case PLAIT_KIND_SHEAR:
+		plait_solve_distance(&sim->shear, &sim->particles, inverse_h_squared);
+		sim->constraint_solves += sim->shear.count;
+		break;
+	case PLAIT_KIND_BEND:
+		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared);
+		plait_solve_rod_bend(&sim->rod_bend, &sim->particles, inverse_h_squared);
+		sim->constraint_solves += sim->bend.count + sim->rod_bend.count;
+		break;
+	case PLAIT_KIND_COLLISION:
+		plait_collide(sim);
+		break;
+	case PLAIT_KIND_COUNT:
+		break;
+	}
+}
+
+static bool state_is_finite(const plait_sim *sim)
+{
+	const plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		if (!v3_is_finite(p->x[i]) || !v3_is_finite(p->v[i])) {
+			return false;
+		}
+	}
+	return true;
+}
+
+plait_result plait_sim_step(plait_sim *sim, plait_error *error)
+{
+	plait_result result = plait_sim_update_schedule(sim, error);
+	if (result != PLAIT_OK) {
+		return result;
+	}
+	const plait_settings *settings = &sim->settings;
+	plait_particles *p = &sim->particles;
+	int substeps = settings->substeps;
+	float frame_time = settings->time_scale / settings->fps;
+	float h = frame_time / (float)substeps;
+	float inverse_h_squared = 1.0f / (h * h);
+	bool air = plait_air_active(sim);
+	sim->substep_time = h;
+	sim->contacts = 0;
+	sim->constraint_solves = 0;
+
+	memcpy(p->x_frame, p->x, sizeof(vec3) * (size_t)p->count);
+	memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
+	for (int s = 0; s < substeps; ++s) {
+		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;
+		sim->substep = s;
+		plait_colliders_begin_substep(sim, t0, t1);
+		if (air) {
+			plait_air_accumulate(sim, sim->time + (double)(t0 * frame_time));
+		}
+		plait_integrate_velocities(sim, h, air);
+		predict_positions(sim, h, t1);
+		reset_multipliers(sim);
+		if (!plait_contacts_begin_substep(sim)) {
+			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory in the collision stage");
+		}
+
+		const plait_schedule *schedule = &sim->schedule;
+		for (int e = schedule->substep_start[s]; e < schedule->substep_start[s + 1]; ++e) {
+			run_event(sim, (plait_kind)sim->schedule_kinds[schedule->events[e]], inverse_h_squared);
+		}
+
+		update_velocities(sim, h);
+		plait_contacts_end_substep(sim);
+	}
+
+	if (!state_is_finite(sim)) {
+		memcpy(p->x, p->x_frame, sizeof(vec3) * (size_t)p->count);
+		memcpy(p->v, p->v_frame, sizeof(vec3) * (size_t)p->count);
+		return plait_error_set(error, PLAIT_ERROR_NONFINITE,
+		                       "frame %d produced a non-finite position or velocity; try more substeps or "
+		                       "lower resistances",
+		                       sim->frame + 1);
+	}
+	for (int i = 0; i < p->count; ++i) {
+		p->pin_start[i] = p->pin_end[i];
+	}
+	for (int k = 0; k < sim->collider_count; ++k) {
+		sim->colliders[k].transform_start = sim->colliders[k].transform_end;
+	}
+	sim->frame += 1;
+	sim->time += (double)frame_time;
+	return PLAIT_OK;
+}
+
+plait_sim_stats plait_sim_measure(const plait_sim *sim)
+{
+	const plait_particles *p = &sim->particles;
+	plait_sim_stats stats = {0};
+	double scale = sim->settings.space_scale;
+	for (int i = 0; i < p->count; ++i) {
+		if (!v3_is_finite(p->x[i]) || !v3_is_finite(p->v[i])) {
+			stats.nonfinite += 1;
+			continue;
+		}
+		if (p->w[i] > 0.0f) {
+			double speed_sq = (double)v3_length_sq(p->v[i]) * scale * scale;
+			stats.kinetic_energy += 0.5 * (double)p->mass[i] * speed_sq;
+		}
+	}
+	stats.max_strain = plait_distance_max_strain(&sim->stretch, p);
+	stats.penetrations = plait_count_penetrations(sim);
+	return stats;
+}

@@ -1,0 +1,611 @@
+/* Creating objects: cloth, curves, particles and colliders become particles, materials and
+ * constraints of the one simulation (paper §3, §5), and the object accessors.
+ *
+ * Resistances to material stiffness (scaling relation "link": the resistance is also the number
+ * of iterations per frame of that kind, seed 000 §2.4, §9):
+ *   cloth stretch, compression, shear: membrane stiffness k = R * 100 N/m. An edge of rest
+ *     length L standing for area A_e (each polygon gives 2 A / n to each of its n edges; each
+ *     quad A / 2 to each diagonal) gets compliance alpha = L^2 / (k A_e), so a sheet is as stiff
+ *     at any resolution;
+ *   cloth bend: bending stiffness B = R * 1e-4 N m; a hinge of length |e| between triangles of
+ *     area A1, A2 gets alpha = (A1 + A2) / (3 B |e|^2) on its angle (discrete shells);
+ *   curve stretch: axial stiffness EA = R * 100 N, alpha = L / EA;
+ *   curve bend: bending stiffness EI = R * 1e-4 N m^2, alpha = L^3 / (4 EI) on the distance of
+ *     a vertex from the midpoint of its neighbours.
+ * Quantities are converted to scene units with space_scale. */
+#include <stdio.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "dynamics/constraints.h"
+#include "dynamics/sim_store.h"
+#include "world/world.h"
+
+#define STRETCH_STIFFNESS_PER_RESISTANCE 100.0f /* N/m */
+#define BEND_STIFFNESS_PER_RESISTANCE 1e-4f     /* N m */
+#define MAX_RESISTANCE 10000.0f
+
+static bool in_range(float value, float low, float high) { return value >= low && value <= high; }
+static bool finite3(plait_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+static plait_result check_range(plait_error *error, const char *object, const char *field, float value, float low,
+                                float high)
+{
+	if (!in_range(value, low, high)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: %s must be in %g..%g, got %g", object,
+		                       field, (double)low, (double)high, (double)value);
+	}
+	return PLAIT_OK;
+}
+
+static plait_result check_surface(plait_error *error, const char *object, const plait_surface_def *s)
+{
+	plait_result r;
+	if ((r = check_range(error, object, "thickness", s->thickness, 0.0f, 1e6f)) != PLAIT_OK ||
+	    (r = check_range(error, object, "friction", s->friction, 0.0f, 10.0f)) != PLAIT_OK ||
+	    (r = check_range(error, object, "stickiness", s->stickiness, 0.0f, 1.0f)) != PLAIT_OK ||
+	    (r = check_range(error, object, "bounce", s->bounce, 0.0f, 1.0f)) != PLAIT_OK) {
+		return r;
+	}
+	return PLAIT_OK;
+}
+
+static plait_result check_positions(plait_error *error, const char *object, const char *field,
+                                    const plait_vec3 *positions, int count)
+{
+	if (count > 0 && positions == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: %s is NULL", object, field);
+	}
+	for (int i = 0; i < count; ++i) {
+		if (!finite3(positions[i])) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s[%d] is not finite", object, field, i);
+		}
+	}
+	return PLAIT_OK;
+}
+
+static plait_result check_pins(plait_error *error, const char *object, const int *pins, int pin_count,
+                               int vertex_count)
+{
+	if (pin_count < 0 || (pin_count > 0 && pins == NULL)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: pins array is missing", object);
+	}
+	for (int k = 0; k < pin_count; ++k) {
+		if (pins[k] < 0 || pins[k] >= vertex_count) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: pin %d is vertex %d, outside 0..%d",
+			                       object, k, pins[k], vertex_count - 1);
+		}
+	}
+	return PLAIT_OK;
+}
+
+static int resistance_importance(float resistance)
+{
+	float ceiling = ceilf(resistance);
+	return ceiling > (float)PLAIT_MAX_IMPORTANCE ? PLAIT_MAX_IMPORTANCE : (int)ceiling;
+}
+
+static float stiffness_compliance(float resistance, float per_resistance)
+{
+	return resistance > 0.0f ? 1.0f / (resistance * per_resistance) : INFINITY;
+}
+
+static int add_material(plait_sim *sim, int object, plait_object_type type, const plait_surface_def *surface,
+                        float damp)
+{
+	int m = sim->material_count++;
+	plait_material *mat = &sim->materials[m];
+	memset(mat, 0, sizeof *mat);
+	mat->object = object;
+	mat->type = type;
+	mat->thickness = surface->thickness;
+	mat->friction = surface->friction;
+	mat->stickiness = surface->stickiness;
+	mat->bounce = surface->bounce;
+	mat->collide = surface->collide;
+	mat->damp = damp;
+	return m;
+}
+
+static void object_label(char *label, size_t size, const char *kind, const char *name)
+{
+	snprintf(label, size, "%s '%s'", kind, name != NULL && name[0] != '\0' ? name : "(unnamed)");
+}
+
+/* Removes an object that failed half-way through creation. */
+static void abandon_object(plait_world *world, plait_object *object)
+{
+	plait_topology_destroy(&object->topology, &world->allocator);
+	object->alive = false;
+	world->object_count -= 1;
+}
+
+static void apply_pins(plait_sim *sim, int first, const int *pins, int pin_count)
+{
+	for (int k = 0; k < pin_count; ++k) {
+		int i = first + pins[k];
+		sim->particles.flags[i] |= PLAIT_PARTICLE_PINNED;
+		sim->particles.w[i] = 0.0f;
+	}
+}
+
+plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_def *def, plait_error *error)
+{
+	plait_object_id id = {0};
+	plait_world *world = world_id.world;
+	plait_error_clear(error);
+	if (world == NULL || def == NULL) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "plait_create_cloth needs a world and a def");
+		return id;
+	}
+	char label[PLAIT_MAX_NAME + 16];
+	object_label(label, sizeof label, "cloth", def->name);
+	const plait_mesh_def *mesh = &def->mesh;
+	if (mesh->vertex_count <= 0 || mesh->face_count <= 0) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: a cloth needs vertices and faces", label);
+		return id;
+	}
+	if (check_positions(error, label, "positions", mesh->positions, mesh->vertex_count) != PLAIT_OK ||
+	    (def->velocities != NULL &&
+	     check_positions(error, label, "velocities", def->velocities, mesh->vertex_count) != PLAIT_OK) ||
+	    check_range(error, label, "density", def->density, 1e-9f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f, MAX_RESISTANCE) !=
+	        PLAIT_OK ||
+	    check_range(error, label, "shear_resistance", def->shear_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "rest_length_scale", def->rest_length_scale, 0.01f, 10.0f) != PLAIT_OK ||
+	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "tangential_drag", def->tangential_drag, 0.0f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "lift", def->lift, 0.0f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
+	    check_range(error, label, "iterations", (float)def->iterations, 0.0f, (float)PLAIT_MAX_IMPORTANCE) !=
+	        PLAIT_OK ||
+	    check_surface(error, label, &def->surface) != PLAIT_OK ||
+	    check_pins(error, label, def->pins, def->pin_count, mesh->vertex_count) != PLAIT_OK) {
+		return id;
+	}
+
+	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_CLOTH, def->name, &id);
+	if (object == NULL) {
+		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
+		return (plait_object_id){0};
+	}
+	plait_topology *topology = &object->topology;
+	if (plait_topology_build(topology, &world->allocator, mesh->vertex_count, mesh->face_sizes, mesh->face_count,
+	                         mesh->face_indices, error) != PLAIT_OK) {
+		char reason[PLAIT_ERROR_MESSAGE_SIZE];
+		snprintf(reason, sizeof reason, "%s", error != NULL ? error->message : "");
+		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s", label, reason);
+		abandon_object(world, object);
+		return (plait_object_id){0};
+	}
+
+	plait_sim *sim = &world->sim;
+	const plait_vec3 *x = mesh->positions;
+	int vertex_count = mesh->vertex_count;
+	int quad_count = 0;
+	for (int f = 0; f < topology->polygon_count; ++f) {
+		quad_count += topology->polygon_sizes[f] == 4;
+	}
+	int bend_count = 0;
+	for (int e = 0; e < topology->edge_count; ++e) {
+		bend_count += topology->edge_triangle_count[e] == 2;
+	}
+	plait_allocator *a = &world->allocator;
+	float *polygon_area = plait_alloc_zero(a, (size_t)topology->polygon_count, sizeof(float));
+	float *triangle_area = plait_alloc_zero(a, (size_t)topology->triangle_count, sizeof(float));
+	float *vertex_area = plait_alloc_zero(a, (size_t)vertex_count, sizeof(float));
+	bool ok = polygon_area && triangle_area && vertex_area && plait_sim_reserve_particles(sim, vertex_count) &&
+	          plait_sim_reserve_materials(sim, 1) && plait_sim_reserve_distance(sim, &sim->stretch, topology->edge_count) &&
+	          plait_sim_reserve_distance(sim, &sim->shear, 2 * quad_count) && plait_sim_reserve_bend(sim, bend_count) &&
+	          plait_sim_reserve_aero(sim, topology->triangle_count);
+	if (!ok) {
+		plait_free(a, polygon_area);
+		plait_free(a, triangle_area);
+		plait_free(a, vertex_area);
+		abandon_object(world, object);
+		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
+		return (plait_object_id){0};
+	}
+
+	/* Areas: mass and air force are spread by area (seed 003), a third of each triangle. */
+	float total_area = 0.0f;
+	for (int t = 0; t < topology->triangle_count; ++t) {
+		const int *tri = topology->triangles[t];
+		float area = 0.5f * v3_length(v3_cross(v3_sub(x[tri[1]], x[tri[0]]), v3_sub(x[tri[2]], x[tri[0]])));
+		triangle_area[t] = area;
+		polygon_area[topology->triangle_polygon[t]] += area;
+		for (int k = 0; k < 3; ++k) {
+			vertex_area[tri[k]] += area / 3.0f;
+		}
+		total_area += area;
+	}
+	float scale = world->def.space_scale;
+	float mean_vertex_area = total_area / (float)vertex_count;
+
+	int slot = id.index1 - 1;
+	int material = add_material(sim, slot, PLAIT_OBJECT_CLOTH, &def->surface, def->damp);
+	plait_material *mat = &sim->materials[material];
+	mat->drag = def->drag;
+	mat->tangential_drag = def->tangential_drag;
+	mat->lift = def->lift;
+	object->material = material;
+	object->first_particle = sim->particles.count;
+	object->particle_count = vertex_count;
+	uint8_t flags = def->surface.collide ? PLAIT_PARTICLE_COLLIDE : 0;
+	for (int i = 0; i < vertex_count; ++i) {
+		/* A vertex on no triangle still needs a mass: give it an average vertex's. */
+		float area = vertex_area[i] > 0.0f ? vertex_area[i] : mean_vertex_area;
+		float mass = def->density * area * scale * scale;
+		if (!(mass > 0.0f)) {
+			mass = 1e-6f;
+		}
+		vec3 velocity = def->velocities != NULL ? def->velocities[i] : v3(0.0f, 0.0f, 0.0f);
+		plait_sim_add_particle(sim, x[i], velocity, mass, def->surface.thickness, material, flags);
+	}
+	int first = object->first_particle;
+	apply_pins(sim, first, def->pins, def->pin_count);
+
+	/* Stretch and compression on polygon edges (and fan diagonals of polygons larger than
+	 * quads); shear on both diagonals of each quad (seed 003: separate shear). */
+	float stretch_alpha = stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
+	float compression_alpha = stiffness_compliance(def->compression_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
+	float shear_alpha = stiffness_compliance(def->shear_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
+	bool has_stretch = def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f;
+	for (int e = 0; e < topology->edge_count && has_stretch; ++e) {
+		int v0 = topology->edges[e][0], v1 = topology->edges[e][1];
+		bool quad_diagonal = false;
+		float edge_area = 0.0f;
+		int parents = topology->edge_triangle_count[e] < 2 ? topology->edge_triangle_count[e] : 2;
+		for (int k = 0; k < parents; ++k) {
+			int polygon = topology->triangle_polygon[topology->edge_triangles[e][k]];
+			int size = topology->polygon_sizes[polygon];
+			quad_diagonal = quad_diagonal || (size == 4 && topology->edge_flags[e] == PLAIT_EDGE_DIAGONAL);
+			edge_area += 2.0f * polygon_area[polygon] / (float)size;
+		}
+		if (quad_diagonal) {
+			continue;
+		}
+		float rest = v3_length(v3_sub(x[v1], x[v0]));
+		float ratio = edge_area > 0.0f ? rest * rest / edge_area : 1.0f;
+		plait_sim_add_distance(&sim->stretch, first + v0, first + v1, rest * def->rest_length_scale,
+		                       stretch_alpha * ratio, compression_alpha * ratio);
+	}
+	if (def->shear_resistance > 0.0f) {
+		for (int f = 0; f < topology->polygon_count; ++f) {
+			if (topology->polygon_sizes[f] != 4) {
+				continue;
+			}
+			const int *q = topology->polygon_indices + topology->polygon_starts[f];
+			for (int k = 0; k < 2; ++k) {
+				int v0 = q[k], v1 = q[k + 2];
+				float rest = v3_length(v3_sub(x[v1], x[v0]));
+				float edge_area = 0.5f * polygon_area[f];
+				float ratio = edge_area > 0.0f ? rest * rest / edge_area : 1.0f;
+				plait_sim_add_distance(&sim->shear, first + v0, first + v1, rest * def->rest_length_scale,
+				                       shear_alpha * ratio, shear_alpha * ratio);
+			}
+		}
+	}
+	if (def->bend_resistance > 0.0f) {
+		float bending_stiffness = def->bend_resistance * BEND_STIFFNESS_PER_RESISTANCE / (scale * scale);
+		for (int e = 0; e < topology->edge_count; ++e) {
+			if (topology->edge_triangle_count[e] != 2) {
+				continue;
+			}
+			int t0 = topology->edge_triangles[e][0], t1 = topology->edge_triangles[e][1];
+			/* Hinge (p0, p1) in the order triangle t0 runs along it; wings opposite. */
+			const int *a0 = topology->triangles[t0], *a1 = topology->triangles[t1];
+			int p0 = -1, p1 = -1, p2 = -1, p3 = -1;
+			for (int k = 0; k < 3; ++k) {
+				int u = a0[k], v = a0[(k + 1) % 3];
+				if ((u == topology->edges[e][0] && v == topology->edges[e][1]) ||
+				    (v == topology->edges[e][0] && u == topology->edges[e][1])) {
+					p0 = u;
+					p1 = v;
+					p2 = a0[(k + 2) % 3];
+				}
+			}
+			for (int k = 0; k < 3; ++k) {
+				if (a1[k] != p0 && a1[k] != p1) {
+					p3 = a1[k];
+				}
+			}
+			float angle;
+			if (p2 < 0 || p3 < 0 || !plait_dihedral_angle(x[p0], x[p1], x[p2], x[p3], &angle, NULL)) {
+				continue;
+			}
+			float hinge_sq = v3_length_sq(v3_sub(x[p1], x[p0]));
+			float areas = triangle_area[t0] + triangle_area[t1];
+			int c = sim->bend.count++;
+			sim->bend.quad[c][0] = first + p0;
+			sim->bend.quad[c][1] = first + p1;
+			sim->bend.quad[c][2] = first + p2;
+			sim->bend.quad[c][3] = first + p3;
+			sim->bend.rest_angle[c] = angle;
+			sim->bend.compliance[c] = areas / (3.0f * bending_stiffness * hinge_sq);
+			sim->bend.lambda[c] = 0.0f;
+		}
+	}
+	for (int t = 0; t < topology->triangle_count; ++t) {
+		int c = sim->aero.count++;
+		for (int k = 0; k < 3; ++k) {
+			sim->aero.triangle[c][k] = first + topology->triangles[t][k];
+		}
+		sim->aero.material[c] = material;
+	}
+	plait_free(a, polygon_area);
+	plait_free(a, triangle_area);
+	plait_free(a, vertex_area);
+
+	int override = def->iterations;
+	object->importance[PLAIT_KIND_STRETCH] =
+	    override > 0 ? override
+	                 : resistance_importance(fmaxf(def->stretch_resistance, def->compression_resistance));
+	object->importance[PLAIT_KIND_SHEAR] = override > 0 ? override : resistance_importance(def->shear_resistance);
+	object->importance[PLAIT_KIND_BEND] = override > 0 ? override : resistance_importance(def->bend_resistance);
+	plait_world_update_kinds(world);
+	return id;
+}
+
+plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_def *def, plait_error *error)
+{
+	plait_object_id id = {0};
+	plait_world *world = world_id.world;
+	plait_error_clear(error);
+	if (world == NULL || def == NULL) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "plait_create_curve needs a world and a def");
+		return id;
+	}
+	char label[PLAIT_MAX_NAME + 16];
+	object_label(label, sizeof label, "curve", def->name);
+	int n = def->vertex_count;
+	if (n < 2) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: a curve needs at least 2 vertices, got %d", label, n);
+		return id;
+	}
+	if (check_positions(error, label, "positions", def->positions, n) != PLAIT_OK ||
+	    (def->velocities != NULL && check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
+	    check_range(error, label, "mass", def->mass, 1e-12f, 1e9f) != PLAIT_OK ||
+	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f, MAX_RESISTANCE) !=
+	        PLAIT_OK ||
+	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "rest_length_scale", def->rest_length_scale, 0.01f, 10.0f) != PLAIT_OK ||
+	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
+	    check_range(error, label, "iterations", (float)def->iterations, 0.0f, (float)PLAIT_MAX_IMPORTANCE) !=
+	        PLAIT_OK ||
+	    check_surface(error, label, &def->surface) != PLAIT_OK ||
+	    check_pins(error, label, def->pins, def->pin_count, n) != PLAIT_OK) {
+		return id;
+	}
+	for (int i = 0; i + 1 < n; ++i) {
+		if (v3_length(v3_sub(def->positions[i + 1], def->positions[i])) <= 0.0f) {
+			plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: vertices %d and %d coincide (zero-length edge)",
+			                label, i, i + 1);
+			return id;
+		}
+	}
+	plait_sim *sim = &world->sim;
+	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_CURVE, def->name, &id);
+	bool ok = object != NULL && plait_sim_reserve_particles(sim, n) && plait_sim_reserve_materials(sim, 1) &&
+	          plait_sim_reserve_distance(sim, &sim->stretch, n - 1) && plait_sim_reserve_rod_bend(sim, n);
+	if (!ok) {
+		if (object != NULL) {
+			abandon_object(world, object);
+		}
+		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
+		return (plait_object_id){0};
+	}
+	float scale = world->def.space_scale;
+	int material = add_material(sim, id.index1 - 1, PLAIT_OBJECT_CURVE, &def->surface, def->damp);
+	plait_material *mat = &sim->materials[material];
+	float radius_m = fmaxf(def->surface.thickness * scale, 1e-3f);
+	mat->point_drag = def->drag;
+	mat->point_area = PLAIT_PI * radius_m * radius_m;
+	object->material = material;
+	object->first_particle = sim->particles.count;
+	object->particle_count = n;
+	uint8_t flags = def->surface.collide ? PLAIT_PARTICLE_COLLIDE : 0;
+	for (int i = 0; i < n; ++i) {
+		vec3 velocity = def->velocities != NULL ? def->velocities[i] : v3(0.0f, 0.0f, 0.0f);
+		plait_sim_add_particle(sim, def->positions[i], velocity, def->mass, def->surface.thickness, material, flags);
+	}
+	int first = object->first_particle;
+	apply_pins(sim, first, def->pins, def->pin_count);
+
+	const plait_vec3 *x = def->positions;
+	if (def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f) {
+		float axial_tension = def->stretch_resistance * STRETCH_STIFFNESS_PER_RESISTANCE / scale;
+		float axial_compression = def->compression_resistance * STRETCH_STIFFNESS_PER_RESISTANCE / scale;
+		for (int i = 0; i + 1 < n; ++i) {
+			float rest = v3_length(v3_sub(x[i + 1], x[i]));
+			plait_sim_add_distance(&sim->stretch, first + i, first + i + 1, rest * def->rest_length_scale,
+			                       axial_tension > 0.0f ? rest / axial_tension : INFINITY,
+			                       axial_compression > 0.0f ? rest / axial_compression : INFINITY);
+		}
+	}
+	if (def->bend_resistance > 0.0f) {
+		float bending = def->bend_resistance * BEND_STIFFNESS_PER_RESISTANCE / (scale * scale * scale);
+		for (int i = 1; i + 1 < n; ++i) {
+			vec3 mid = v3_scale(v3_add(x[i - 1], x[i + 1]), 0.5f);
+			float length = 0.5f * (v3_length(v3_sub(x[i], x[i - 1])) + v3_length(v3_sub(x[i + 1], x[i])));
+			int c = sim->rod_bend.count++;
+			sim->rod_bend.triple[c][0] = first + i - 1;
+			sim->rod_bend.triple[c][1] = first + i;
+			sim->rod_bend.triple[c][2] = first + i + 1;
+			sim->rod_bend.rest[c] = v3_length(v3_sub(x[i], mid));
+			sim->rod_bend.compliance[c] = length * length * length / (4.0f * bending);
+			sim->rod_bend.lambda[c] = 0.0f;
+		}
+	}
+	int override = def->iterations;
+	object->importance[PLAIT_KIND_STRETCH] =
+	    override > 0 ? override
+	                 : resistance_importance(fmaxf(def->stretch_resistance, def->compression_resistance));
+	object->importance[PLAIT_KIND_BEND] = override > 0 ? override : resistance_importance(def->bend_resistance);
+	plait_world_update_kinds(world);
+	return id;
+}
+
+plait_object_id plait_create_particles(plait_world_id world_id, const plait_particles_def *def, plait_error *error)
+{
+	plait_object_id id = {0};
+	plait_world *world = world_id.world;
+	plait_error_clear(error);
+	if (world == NULL || def == NULL) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "plait_create_particles needs a world and a def");
+		return id;
+	}
+	char label[PLAIT_MAX_NAME + 16];
+	object_label(label, sizeof label, "particles", def->name);
+	int n = def->count;
+	if (n < 1) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: needs at least one particle, got %d", label, n);
+		return id;
+	}
+	if (check_positions(error, label, "positions", def->positions, n) != PLAIT_OK ||
+	    (def->velocities != NULL && check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
+	    check_range(error, label, "mass", def->mass, 1e-12f, 1e9f) != PLAIT_OK ||
+	    check_range(error, label, "radius", def->radius, 1e-9f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
+	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
+	    check_surface(error, label, &def->surface) != PLAIT_OK) {
+		return id;
+	}
+	plait_sim *sim = &world->sim;
+	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_PARTICLES, def->name, &id);
+	bool ok = object != NULL && plait_sim_reserve_particles(sim, n) && plait_sim_reserve_materials(sim, 1);
+	if (!ok) {
+		if (object != NULL) {
+			abandon_object(world, object);
+		}
+		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
+		return (plait_object_id){0};
+	}
+	float scale = world->def.space_scale;
+	float radius = def->radius + def->surface.thickness;
+	int material = add_material(sim, id.index1 - 1, PLAIT_OBJECT_PARTICLES, &def->surface, def->damp);
+	plait_material *mat = &sim->materials[material];
+	mat->self_collide = def->self_collide;
+	mat->point_drag = def->drag;
+	mat->point_area = PLAIT_PI * (radius * scale) * (radius * scale);
+	object->material = material;
+	object->first_particle = sim->particles.count;
+	object->particle_count = n;
+	uint8_t flags = def->surface.collide ? PLAIT_PARTICLE_COLLIDE : 0;
+	for (int i = 0; i < n; ++i) {
+		vec3 velocity = def->velocities != NULL ? def->velocities[i] : v3(0.0f, 0.0f, 0.0f);
+		plait_sim_add_particle(sim, def->positions[i], velocity, def->mass, radius, material, flags);
+	}
+	plait_world_update_kinds(world);
+	return id;
+}
+
+static plait_result build_shape(const plait_collider_def *def, const char *label, plait_shape *shape,
+                                plait_error *error)
+{
+	memset(shape, 0, sizeof *shape);
+	shape->type = def->shape;
+	shape->rotation = m3_identity();
+	switch (def->shape) {
+	case PLAIT_SHAPE_PLANE: {
+		if (!finite3(def->point) || !finite3(def->normal) || v3_length(def->normal) < 1e-12f) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+			                       "%s: a plane needs a finite point and a non-zero normal", label);
+		}
+		shape->point = def->point;
+		shape->normal = v3_normalize(def->normal);
+		return PLAIT_OK;
+	}
+	case PLAIT_SHAPE_SPHERE:
+		if (!finite3(def->center) || !(def->radius > 0.0f) || !isfinite(def->radius)) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+			                       "%s: a sphere needs a finite center and radius > 0, got radius %g", label,
+			                       (double)def->radius);
+		}
+		shape->center = def->center;
+		shape->radius = def->radius;
+		return PLAIT_OK;
+	case PLAIT_SHAPE_CAPSULE:
+		if (!finite3(def->a) || !finite3(def->b) || !(def->radius > 0.0f) || !isfinite(def->radius)) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+			                       "%s: a capsule needs finite ends a, b and radius > 0, got radius %g", label,
+			                       (double)def->radius);
+		}
+		shape->a = def->a;
+		shape->b = def->b;
+		shape->radius = def->radius;
+		return PLAIT_OK;
+	case PLAIT_SHAPE_BOX:
+		if (!finite3(def->center) || !finite3(def->rotation_deg) || !(def->size.x > 0.0f) ||
+		    !(def->size.y > 0.0f) || !(def->size.z > 0.0f) || !finite3(def->size)) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+			                       "%s: a box needs a finite center and rotation and a size > 0 on every axis",
+			                       label);
+		}
+		shape->center = def->center;
+		shape->half_extents = v3_scale(def->size, 0.5f);
+		shape->rotation = m3_from_euler_deg(def->rotation_deg);
+		return PLAIT_OK;
+	case PLAIT_SHAPE_MESH:
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "%s: triangle-mesh colliders are not supported yet", label);
+	}
+	return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown shape %d", label, (int)def->shape);
+}
+
+static plait_result check_transform(plait_error *error, const char *label, plait_transform t)
+{
+	if (!finite3(t.translate) || !finite3(t.rotate_deg) || !(t.scale > 0.0f) || !isfinite(t.scale)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "%s: transform needs finite translate and rotate and scale > 0", label);
+	}
+	return PLAIT_OK;
+}
+
+plait_object_id plait_create_collider(plait_world_id world_id, const plait_collider_def *def, plait_error *error)
+{
+	plait_object_id id = {0};
+	plait_world *world = world_id.world;
+	plait_error_clear(error);
+	if (world == NULL || def == NULL) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "plait_create_collider needs a world and a def");
+		return id;
+	}
+	char label[PLAIT_MAX_NAME + 16];
+	object_label(label, sizeof label, "collider", def->name);
+	plait_shape shape;
+	if (build_shape(def, label, &shape, error) != PLAIT_OK || check_surface(error, label, &def->surface) != PLAIT_OK ||
+	    check_transform(error, label, def->transform) != PLAIT_OK) {
+		return id;
+	}
+	plait_sim *sim = &world->sim;
+	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_COLLIDER, def->name, &id);
+	bool ok = object != NULL && plait_sim_reserve_colliders(sim, 1) && plait_sim_reserve_materials(sim, 1);
+	if (!ok) {
+		if (object != NULL) {
+			abandon_object(world, object);
+		}
+		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
+		return (plait_object_id){0};
+	}
+	object->material = add_material(sim, id.index1 - 1, PLAIT_OBJECT_COLLIDER, &def->surface, 0.0f);
+	int k = sim->collider_count++;
+	plait_collider *collider = &sim->colliders[k];
+	memset(collider, 0, sizeof *collider);
+	collider->object = id.index1 - 1;
+	collider->shape = shape;
+	collider->transform_start = def->transform;
+	collider->transform_end = def->transform;
+	collider->thickness = def->surface.thickness;
+	collider->friction = def->surface.friction;
+	collider->stickiness = def->surface.stickiness;
+	collider->bounce = def->surface.bounce;
+	collider->collide = def->surface.collide;
+	object->collider = k;
+	plait_world_update_kinds(world);
+	return id;
+}

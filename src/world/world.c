@@ -1,0 +1,327 @@
+/* World lifetime, settings, stepping, statistics and the schedule's public view. */
+#include "world/world.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "core/error.h"
+#include "dynamics/contact.h"
+#include "dynamics/sim_store.h"
+#include "dynamics/solver.h"
+
+#define PLAIT_DEF_MAGIC 0x504c4154
+
+plait_world_def plait_default_world_def(void)
+{
+	plait_world_def def;
+	memset(&def, 0, sizeof def);
+	def.fps = 24.0f;
+	def.substeps = 3;
+	def.max_collision_iterations = 4;
+	def.gravity = (plait_vec3){0.0f, -9.81f, 0.0f};
+	def.air_density = 1.0f;
+	def.wind.direction = (plait_vec3){1.0f, 0.0f, 0.0f};
+	def.space_scale = 1.0f;
+	def.time_scale = 1.0f;
+	def.worker_count = 1;
+	def.internal_value = PLAIT_DEF_MAGIC;
+	return def;
+}
+
+static bool finite3(plait_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+static plait_result validate_world_def(const plait_world_def *def, plait_error *error)
+{
+	if (def == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "world def is NULL");
+	}
+	if (def->internal_value != PLAIT_DEF_MAGIC) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "world def was not initialised with plait_default_world_def()");
+	}
+	if (!(def->fps > 0.0f) || !isfinite(def->fps)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "fps must be > 0, got %g", (double)def->fps);
+	}
+	if (def->substeps < 1 || def->substeps > 1000) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "substeps must be in 1..1000, got %d",
+		                       def->substeps);
+	}
+	if (def->max_collision_iterations < 0 || def->max_collision_iterations > PLAIT_MAX_IMPORTANCE) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "max_collision_iterations must be in 0..%d, got %d", PLAIT_MAX_IMPORTANCE,
+		                       def->max_collision_iterations);
+	}
+	if (!finite3(def->gravity)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "gravity must be finite");
+	}
+	if (!(def->air_density >= 0.0f) || !isfinite(def->air_density)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "air_density must be >= 0, got %g",
+		                       (double)def->air_density);
+	}
+	if (!(def->wind.speed >= 0.0f) || !isfinite(def->wind.speed) || !finite3(def->wind.direction)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "wind speed must be >= 0 and direction finite");
+	}
+	if (!(def->wind.noise >= 0.0f && def->wind.noise <= 10.0f)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "wind noise must be in 0..10, got %g",
+		                       (double)def->wind.noise);
+	}
+	if (!(def->space_scale > 0.0f) || !isfinite(def->space_scale)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "space_scale must be > 0, got %g",
+		                       (double)def->space_scale);
+	}
+	if (!(def->time_scale > 0.0f) || !isfinite(def->time_scale)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "time_scale must be > 0, got %g",
+		                       (double)def->time_scale);
+	}
+	if ((def->alloc == NULL) != (def->free == NULL)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "alloc and free hooks must be set together");
+	}
+	return PLAIT_OK;
+}
+
+static void apply_settings(plait_world *world)
+{
+	const plait_world_def *def = &world->def;
+	plait_settings *s = &world->sim.settings;
+	float inverse_scale = 1.0f / def->space_scale;
+	s->fps = def->fps;
+	s->time_scale = def->time_scale;
+	s->space_scale = def->space_scale;
+	s->substeps = def->substeps;
+	s->max_collision_iterations = def->max_collision_iterations;
+	s->gravity = (vec3){def->gravity.x * inverse_scale, def->gravity.y * inverse_scale, def->gravity.z * inverse_scale};
+	s->air_density = def->air_density;
+	vec3 direction = v3_normalize(def->wind.direction);
+	s->wind_velocity = v3_scale(direction, def->wind.speed * inverse_scale);
+	s->wind_noise = def->wind.noise;
+	s->seed = def->seed;
+	world->sim.schedule_dirty = true;
+}
+
+plait_world_id plait_create_world(const plait_world_def *def, plait_error *error)
+{
+	plait_world_id id = {NULL};
+	plait_error_clear(error);
+	if (validate_world_def(def, error) != PLAIT_OK) {
+		return id;
+	}
+	plait_allocator allocator = {def->alloc, def->free, def->allocator_context};
+	plait_world *world = plait_alloc_zero(&allocator, 1, sizeof *world);
+	if (world == NULL) {
+		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory creating a world");
+		return id;
+	}
+	world->allocator = allocator;
+	world->def = *def;
+	plait_sim_init(&world->sim, &allocator);
+	apply_settings(world);
+	id.world = world;
+	return id;
+}
+
+static plait_world *resolve_world(plait_world_id id) { return id.world; }
+
+void plait_destroy_world(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	if (world == NULL) {
+		return;
+	}
+	for (int k = 0; k < world->object_count; ++k) {
+		plait_topology_destroy(&world->objects[k].topology, &world->allocator);
+	}
+	plait_free(&world->allocator, world->objects);
+	plait_contacts_destroy(&world->sim);
+	plait_sim_destroy(&world->sim);
+	plait_allocator allocator = world->allocator;
+	plait_free(&allocator, world);
+}
+
+bool plait_world_is_valid(plait_world_id id) { return id.world != NULL; }
+
+plait_result plait_world_set_def(plait_world_id id, const plait_world_def *def, plait_error *error)
+{
+	plait_world *world = resolve_world(id);
+	if (world == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ID, "null world id");
+	}
+	plait_result result = validate_world_def(def, error);
+	if (result != PLAIT_OK) {
+		return result;
+	}
+	/* Hooks are fixed at creation: memory already handed out must go back to the same place. */
+	plait_world_def kept = *def;
+	kept.alloc = world->def.alloc;
+	kept.free = world->def.free;
+	kept.allocator_context = world->def.allocator_context;
+	world->def = kept;
+	apply_settings(world);
+	return PLAIT_OK;
+}
+
+plait_world_def plait_world_get_def(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	return world != NULL ? world->def : plait_default_world_def();
+}
+
+plait_result plait_world_step(plait_world_id id, plait_error *error)
+{
+	plait_world *world = resolve_world(id);
+	if (world == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ID, "null world id");
+	}
+	plait_result result = plait_sim_step(&world->sim, error);
+	plait_sim_stats measured = plait_sim_measure(&world->sim);
+	world->stats.frame = world->sim.frame;
+	world->stats.kinetic_energy = measured.kinetic_energy;
+	world->stats.max_strain = measured.max_strain;
+	world->stats.penetrations = measured.penetrations;
+	world->stats.nonfinite = measured.nonfinite;
+	world->stats.contacts = world->sim.contacts;
+	world->stats.constraint_solves = world->sim.constraint_solves;
+	return result;
+}
+
+int plait_world_get_frame(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	return world != NULL ? world->sim.frame : 0;
+}
+
+double plait_world_get_time(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	return world != NULL ? world->sim.time : 0.0;
+}
+
+plait_frame_stats plait_world_get_stats(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	plait_frame_stats empty = {0};
+	if (world == NULL) {
+		return empty;
+	}
+	if (world->stats.frame == 0 && world->sim.frame == 0) {
+		plait_sim_stats measured = plait_sim_measure(&world->sim);
+		world->stats.kinetic_energy = measured.kinetic_energy;
+		world->stats.max_strain = measured.max_strain;
+		world->stats.penetrations = measured.penetrations;
+		world->stats.nonfinite = measured.nonfinite;
+	}
+	return world->stats;
+}
+
+int plait_world_get_substep_count(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	return world != NULL ? world->def.substeps : 0;
+}
+
+int plait_world_get_schedule(plait_world_id id, int substep, const char **names, int capacity)
+{
+	plait_world *world = resolve_world(id);
+	if (world == NULL || substep < 0 || substep >= world->def.substeps) {
+		return 0;
+	}
+	if (plait_sim_update_schedule(&world->sim, NULL) != PLAIT_OK) {
+		return 0;
+	}
+	const plait_schedule *schedule = &world->sim.schedule;
+	int first = schedule->substep_start[substep], count = schedule->substep_start[substep + 1] - first;
+	for (int e = 0; e < count && e < capacity && names != NULL; ++e) {
+		names[e] = plait_kind_names[world->sim.schedule_kinds[schedule->events[first + e]]];
+	}
+	return count;
+}
+
+plait_object *plait_world_resolve(plait_object_id id, plait_error *error)
+{
+	plait_world *world = id.world;
+	if (world == NULL || id.index1 <= 0 || id.index1 > world->object_count) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ID, "invalid object id");
+		return NULL;
+	}
+	plait_object *object = &world->objects[id.index1 - 1];
+	if (!object->alive || object->generation != id.generation) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ID, "stale object id (the object was destroyed)");
+		return NULL;
+	}
+	return object;
+}
+
+void plait_world_update_kinds(plait_world *world)
+{
+	plait_sim *sim = &world->sim;
+	for (int k = 0; k < PLAIT_KIND_COUNT; ++k) {
+		sim->kind_importance[k] = 0;
+	}
+	for (int o = 0; o < world->object_count; ++o) {
+		const plait_object *object = &world->objects[o];
+		if (!object->alive) {
+			continue;
+		}
+		for (int k = 0; k < PLAIT_KIND_COUNT; ++k) {
+			if (object->importance[k] > sim->kind_importance[k]) {
+				sim->kind_importance[k] = object->importance[k];
+			}
+		}
+	}
+	sim->kind_active[PLAIT_KIND_STRETCH] = sim->stretch.count > 0;
+	sim->kind_active[PLAIT_KIND_SHEAR] = sim->shear.count > 0;
+	sim->kind_active[PLAIT_KIND_BEND] = sim->bend.count + sim->rod_bend.count > 0;
+	bool any_collider = false;
+	int colliding_objects = 0;
+	bool self_pairs = false;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		any_collider = any_collider || sim->colliders[k].collide;
+	}
+	for (int m = 0; m < sim->material_count; ++m) {
+		const plait_material *mat = &sim->materials[m];
+		const plait_object *object = &world->objects[mat->object];
+		if (!object->alive || !mat->collide || mat->type == PLAIT_OBJECT_COLLIDER) {
+			continue;
+		}
+		++colliding_objects;
+		self_pairs = self_pairs || (mat->type == PLAIT_OBJECT_PARTICLES && mat->self_collide);
+	}
+	sim->kind_active[PLAIT_KIND_COLLISION] =
+	    (any_collider && colliding_objects > 0) || colliding_objects >= 2 || self_pairs;
+	sim->schedule_dirty = true;
+}
+
+plait_object *plait_world_new_object(plait_world *world, plait_object_type type, const char *name,
+                                     plait_object_id *id)
+{
+	if (world->object_count == world->object_capacity) {
+		int capacity = world->object_capacity < 8 ? 8 : world->object_capacity * 2;
+		plait_object *bigger = plait_alloc_zero(&world->allocator, (size_t)capacity, sizeof *bigger);
+		if (bigger == NULL) {
+			return NULL;
+		}
+		if (world->object_count > 0) {
+			memcpy(bigger, world->objects, sizeof *bigger * (size_t)world->object_count);
+		}
+		plait_free(&world->allocator, world->objects);
+		world->objects = bigger;
+		world->object_capacity = capacity;
+	}
+	int slot = world->object_count++;
+	plait_object *object = &world->objects[slot];
+	memset(object, 0, sizeof *object);
+	object->alive = true;
+	object->generation = 1;
+	object->type = type;
+	object->collider = -1;
+	object->material = -1;
+	const char *defaults[] = {"cloth", "curve", "particles", "collider"};
+	if (name == NULL || name[0] == '\0') {
+		snprintf(object->name, sizeof object->name, "%s%d", defaults[type], slot + 1);
+	} else {
+		snprintf(object->name, sizeof object->name, "%s", name);
+	}
+	id->world = world;
+	id->index1 = slot + 1;
+	id->generation = object->generation;
+	return object;
+}
