@@ -1,7 +1,8 @@
 #include "mesh_io.h"
 
+#include "mesh_sanity.h"
+
 #include <assimp/cimport.h>
-#include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
 #include <limits.h>
@@ -12,6 +13,8 @@
 
 // Malformed files can nest nodes without end (or in a cycle); no real scene is this deep.
 #define PLAIT_MESH_MAX_NODE_DEPTH 256
+// Far beyond any cloth; keeps corrupt counts from making validation crawl.
+#define PLAIT_MESH_MAX_VERTICES 50000000
 
 typedef struct plait_mesh_builder {
 	const char *path;
@@ -156,7 +159,7 @@ static int plait_compare_vertex(const void *pa, const void *pb)
 }
 
 // Merges vertices with identical positions (assimp only joins within one mesh).
-static bool plait_weld(plait_soup *soup)
+static bool plait_weld(plait_soup *soup, int *unique_count)
 {
 	int n = soup->vertex_count;
 	plait_sort_vertex *sorted = malloc(sizeof *sorted * (size_t)(n > 0 ? n : 1));
@@ -169,7 +172,9 @@ static bool plait_weld(plait_soup *soup)
 	for (int i = 0; i < n; ++i)
 		sorted[i] = (plait_sort_vertex){soup->positions[i], i};
 	qsort(sorted, (size_t)n, sizeof *sorted, plait_compare_vertex);
+	*unique_count = 0;
 	for (int i = 0; i < n;) {
+		*unique_count += 1;
 		int j = i;
 		while (j < n && sorted[j].p.x == sorted[i].p.x && sorted[j].p.y == sorted[i].p.y &&
 		       sorted[j].p.z == sorted[i].p.z) {
@@ -206,8 +211,8 @@ static bool plait_face_is_degenerate(const plait_soup *soup, const int *indices,
 	return longest == 0.0 || area2 <= 1e-6 * longest;
 }
 
-// Drops degenerate faces, then vertices no face uses; renumbers in first-use-stable order.
-static bool plait_clean(plait_soup *soup, plait_mesh_report *report)
+// Drops degenerate faces, then vertices no face uses (merged duplicates are not counted).
+static bool plait_clean(plait_soup *soup, int unique_count, plait_mesh_report *report)
 {
 	int kept_faces = 0, kept_indices = 0, read = 0;
 	for (int f = 0; f < soup->face_count; ++f) {
@@ -242,7 +247,7 @@ static bool plait_clean(plait_soup *soup, plait_mesh_report *report)
 	}
 	for (int k = 0; k < soup->index_count; ++k)
 		soup->face_indices[k] = new_index[soup->face_indices[k]];
-	report->unused_vertices += n - used;
+	report->unused_vertices += unique_count - used;
 	soup->vertex_count = used;
 	free(new_index);
 	return true;
@@ -255,6 +260,10 @@ static bool plait_mesh_validate(const struct aiScene *scene, const char *path, p
 		const struct aiMesh *mesh = scene->mMeshes[m];
 		if (mesh == NULL)
 			continue;
+		if (mesh->mNumVertices > PLAIT_MESH_MAX_VERTICES)
+			return plait_tool_error_set(error,
+			                            "%s: mesh %u has %u vertices, more than the %d a cloth may have",
+			                            path, m, mesh->mNumVertices, PLAIT_MESH_MAX_VERTICES);
 		for (unsigned i = 0; mesh->mVertices != NULL && i < mesh->mNumVertices; ++i) {
 			double x = mesh->mVertices[i].x, y = mesh->mVertices[i].y, z = mesh->mVertices[i].z;
 			if (!isfinite(x) || !isfinite(y) || !isfinite(z))
@@ -286,7 +295,12 @@ bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *repo
 		return plait_tool_error_set(error, "%s: cannot open mesh file: %s", path, strerror(errno));
 	fclose(probe);
 
-	// Validate before post-processing: assimp's steps trust face indices.
+	if (!plait_mesh_check_header(path, error))
+		return false;
+	// No post-processing: aiProcess_JoinIdenticalVertices trusts face indices and merges NaN
+	// vertices out of sight before they can be reported, and in assimp 5.2 a failing
+	// aiApplyPostProcessing crashes. plait_weld below joins vertices instead, across meshes too.
+	// Triangulation stays off so quads stay quads.
 	const struct aiScene *scene = aiImportFile(path, 0);
 	if (scene == NULL)
 		return plait_tool_error_set(error, "%s: cannot read mesh: %s", path, aiGetErrorString());
@@ -298,9 +312,6 @@ bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *repo
 		aiReleaseImport(scene);
 		return false;
 	}
-	scene = aiApplyPostProcessing(scene, aiProcess_JoinIdenticalVertices);
-	if (scene == NULL)
-		return plait_tool_error_set(error, "%s: cannot read mesh: %s", path, aiGetErrorString());
 
 	plait_mesh_builder b = {.path = path, .scene = scene, .error = error};
 	static const double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -314,7 +325,8 @@ bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *repo
 	}
 	report->mesh_count = (int)scene->mNumMeshes;
 	aiReleaseImport(scene);
-	if (ok && (!plait_weld(&b.soup) || !plait_clean(&b.soup, report)))
+	int unique_count = 0;
+	if (ok && (!plait_weld(&b.soup, &unique_count) || !plait_clean(&b.soup, unique_count, report)))
 		ok = plait_tool_error_set(error, "%s: out of memory", path);
 	if (ok && b.soup.face_count == 0) {
 		if (report->degenerate_faces > 0 || report->point_line_faces > 0)

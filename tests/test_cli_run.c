@@ -1,0 +1,415 @@
+/* The CLI run in-process on a tiny scene: output names and contents, PC2 layout, stats.jsonl,
+ * no temporary files left, exit codes, and the exact shape of `explain --json`. */
+#include "cli.h"
+
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <jansson.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+static const char *tiny_scene =
+    "{\"world\": {\"fps\": 24, \"substeps\": 2}, \"frames\": 3, \"objects\": [\n"
+    " {\"name\": \"sheet\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2],\n"
+    "  \"center\": [0, 1, 0]}},\n"
+    " {\"name\": \"rope\", \"type\": \"curve\", \"positions\": [[2, 1, 0], [2.1, 1, 0], [2.2, 1, 0]], "
+    "\"pins\": [0]},\n"
+    " {\"name\": \"dots\", \"type\": \"particles\", \"positions\": [[-2, 1, 0], [-2, 1.5, 0]]},\n"
+    " {\"name\": \"ground\", \"type\": \"collider\", \"shape\": \"plane\"}]}\n";
+
+typedef struct cli_result {
+	int code;
+	char *out;
+	char *err;
+} cli_result;
+
+// Runs `plait ARGS...` in-process with captured output.
+static cli_result run_cli(int argc, const char **argv)
+{
+	cli_result result = {0};
+	size_t out_size = 0, err_size = 0;
+	FILE *out = open_memstream(&result.out, &out_size);
+	FILE *err = open_memstream(&result.err, &err_size);
+	cr_assert(out != NULL && err != NULL);
+	result.code = plait_cli_main(argc, (char **)argv, out, err);
+	fclose(out);
+	fclose(err);
+	return result;
+}
+
+static void free_result(cli_result *result)
+{
+	free(result->out);
+	free(result->err);
+}
+
+static char *make_temp_dir(void)
+{
+	char *dir = strdup("/tmp/plait_cli_test_XXXXXX");
+	cr_assert_not_null(mkdtemp(dir));
+	return dir;
+}
+
+static char *write_scene(const char *dir, const char *json)
+{
+	char *path = malloc(strlen(dir) + 32);
+	sprintf(path, "%s/scene.json", dir);
+	FILE *f = fopen(path, "wb");
+	cr_assert_not_null(f);
+	fputs(json, f);
+	fclose(f);
+	return path;
+}
+
+static char *read_file(const char *path, size_t *size)
+{
+	FILE *f = fopen(path, "rb");
+	if (f == NULL)
+		return NULL;
+	fseek(f, 0, SEEK_END);
+	long n = ftell(f);
+	fseek(f, 0, SEEK_SET);
+	char *data = malloc((size_t)n + 1);
+	size_t got = fread(data, 1, (size_t)n, f);
+	fclose(f);
+	data[got] = '\0';
+	if (size != NULL)
+		*size = got;
+	return data;
+}
+
+static bool exists(const char *dir, const char *name)
+{
+	char path[1024];
+	snprintf(path, sizeof path, "%s/%s", dir, name);
+	struct stat info;
+	return stat(path, &info) == 0;
+}
+
+static int count_files(const char *dir, const char *suffix)
+{
+	DIR *d = opendir(dir);
+	if (d == NULL)
+		return -1;
+	int count = 0;
+	struct dirent *entry;
+	while ((entry = readdir(d)) != NULL) {
+		size_t n = strlen(entry->d_name), m = strlen(suffix);
+		if (entry->d_name[0] != '.' || strcmp(suffix, ".tmp") == 0)
+			if (n >= m && strcmp(entry->d_name + n - m, suffix) == 0)
+				++count;
+	}
+	closedir(d);
+	return count;
+}
+
+static int count_lines_starting(const char *text, const char *prefix)
+{
+	int count = 0;
+	size_t n = strlen(prefix);
+	for (const char *line = text; line != NULL && *line != '\0';) {
+		if (strncmp(line, prefix, n) == 0)
+			++count;
+		line = strchr(line, '\n');
+		if (line != NULL)
+			++line;
+	}
+	return count;
+}
+
+Test(cli_run, obj_output_names_and_contents)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, tiny_scene);
+	char out_dir[512];
+	snprintf(out_dir, sizeof out_dir, "%s/out/nested", dir);
+	const char *argv[] = {"plait", "run", scene, "--out", out_dir};
+	cli_result r = run_cli(5, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+
+	// Frames 0..3 of each object with vertices; none for the collider.
+	static const char *const names[] = {"sheet", "rope", "dots"};
+	for (int o = 0; o < 3; ++o) {
+		for (int f = 0; f <= 3; ++f) {
+			char name[64];
+			snprintf(name, sizeof name, "%s.%04d.obj", names[o], f);
+			cr_expect(exists(out_dir, name), "missing %s", name);
+		}
+	}
+	cr_expect(!exists(out_dir, "sheet.0004.obj"));
+	cr_expect(!exists(out_dir, "ground.0000.obj"));
+	cr_expect_eq(count_files(out_dir, ".obj"), 12);
+	cr_expect_eq(count_files(out_dir, ".tmp"), 0);
+
+	char path[1024];
+	snprintf(path, sizeof path, "%s/sheet.0000.obj", out_dir);
+	char *text = read_file(path, NULL);
+	cr_assert_not_null(text);
+	cr_expect_eq(count_lines_starting(text, "v "), 9);
+	cr_expect_eq(count_lines_starting(text, "f "), 4);
+	// Quads stay quads, 1-based: the first quad is (0,0), (0,1), (1,1), (1,0) of a 3x3 grid.
+	cr_expect(strstr(text, "\nf 1 4 5 2\n") != NULL, "%s", text);
+	cr_expect(strstr(text, "\nv -0.5 1 -0.5\n") != NULL, "%s", text);
+	free(text);
+
+	snprintf(path, sizeof path, "%s/rope.0002.obj", out_dir);
+	text = read_file(path, NULL);
+	cr_expect_eq(count_lines_starting(text, "v "), 3);
+	cr_expect_eq(count_lines_starting(text, "l "), 1);
+	cr_expect(strstr(text, "\nl 1 2 3\n") != NULL, "%s", text);
+	cr_expect_eq(count_lines_starting(text, "f "), 0);
+	free(text);
+
+	snprintf(path, sizeof path, "%s/dots.0003.obj", out_dir);
+	text = read_file(path, NULL);
+	cr_expect_eq(count_lines_starting(text, "v "), 2);
+	cr_expect_eq(count_lines_starting(text, "l "), 0);
+	cr_expect_eq(count_lines_starting(text, "f "), 0);
+	free(text);
+
+	cr_expect(strstr(r.out, out_dir) != NULL, "the summary does not say where: %s", r.out);
+	free_result(&r);
+	free(scene);
+	free(dir);
+}
+
+Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, tiny_scene);
+	const char *argv[] = {"plait", "run", scene, "--out", dir, "--frames", "5"};
+	cli_result r = run_cli(7, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	char path[1024];
+	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
+	char *text = read_file(path, NULL);
+	cr_assert_not_null(text);
+	static const char *const keys[] = {"frame",        "ms",        "kinetic_energy", "max_strain",
+	                                   "penetrations", "nonfinite", "contacts"};
+	int lines = 0;
+	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
+		json_error_t error;
+		json_t *json = json_loads(line, 0, &error);
+		cr_assert_not_null(json, "line %d is not JSON: %s (%s)", lines, line, error.text);
+		cr_expect(json_is_object(json));
+		for (size_t k = 0; k < sizeof keys / sizeof keys[0]; ++k)
+			cr_expect_not_null(json_object_get(json, keys[k]), "line %d has no %s: %s", lines, keys[k], line);
+		cr_expect_eq(json_integer_value(json_object_get(json, "frame")), lines);
+		if (lines == 0)
+			cr_expect_float_eq(json_number_value(json_object_get(json, "ms")), 0.0, 0.0);
+		json_decref(json);
+		++lines;
+	}
+	cr_expect_eq(lines, 6, "frames 0 to 5");
+	cr_expect_eq(count_files(dir, ".tmp"), 0);
+	free(text);
+	free_result(&r);
+	free(scene);
+	free(dir);
+}
+
+static uint32_t read_u32(const unsigned char *p)
+{
+	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static float read_f32(const unsigned char *p)
+{
+	uint32_t bits = read_u32(p);
+	float f;
+	memcpy(&f, &bits, sizeof f);
+	return f;
+}
+
+Test(cli_run, pc2_header_and_sample_count)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, tiny_scene);
+	const char *argv[] = {"plait", "run", scene, "--out", dir, "--format", "pc2", "--frames", "4"};
+	cli_result r = run_cli(9, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	cr_expect_eq(count_files(dir, ".obj"), 0);
+	cr_expect_eq(count_files(dir, ".tmp"), 0);
+	static const struct {
+		const char *name;
+		uint32_t points;
+	} caches[] = {{"sheet.pc2", 9}, {"rope.pc2", 3}, {"dots.pc2", 2}};
+	for (int i = 0; i < 3; ++i) {
+		char path[1024];
+		snprintf(path, sizeof path, "%s/%s", dir, caches[i].name);
+		size_t size = 0;
+		unsigned char *data = (unsigned char *)read_file(path, &size);
+		cr_assert_not_null(data, "missing %s", caches[i].name);
+		cr_assert_geq(size, 32u);
+		cr_expect_eq(memcmp(data, "POINTCACHE2\0", 12), 0);
+		cr_expect_eq(read_u32(data + 12), 1u, "version");
+		cr_expect_eq(read_u32(data + 16), caches[i].points, "numPoints");
+		cr_expect_float_eq(read_f32(data + 20), 0.0f, 0.0f, "startFrame");
+		cr_expect_float_eq(read_f32(data + 24), 1.0f, 0.0f, "sampleRate");
+		cr_expect_eq(read_u32(data + 28), 5u, "numSamples: frames 0 to 4");
+		cr_expect_eq(size, 32u + 5u * caches[i].points * 12u);
+		if (i == 0) {
+			// Sample 0, point 0 is the grid corner (-0.5, 1, -0.5).
+			cr_expect_float_eq(read_f32(data + 32), -0.5f, 1e-6f);
+			cr_expect_float_eq(read_f32(data + 36), 1.0f, 1e-6f);
+			cr_expect_float_eq(read_f32(data + 40), -0.5f, 1e-6f);
+		}
+		free(data);
+	}
+	free_result(&r);
+	free(scene);
+	free(dir);
+}
+
+Test(cli_run, explain_json_has_the_exact_shape)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, tiny_scene);
+	const char *argv[] = {"plait", "explain", scene, "--json"};
+	cli_result r = run_cli(4, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	json_error_t error;
+	json_t *root = json_loads(r.out, 0, &error);
+	cr_assert_not_null(root, "not JSON: %s (%s)", r.out, error.text);
+	cr_assert(json_is_object(root));
+	cr_expect_eq(json_object_size(root), 1u);
+	json_t *substeps = json_object_get(root, "substeps");
+	cr_assert(json_is_array(substeps));
+	cr_expect_eq(json_array_size(substeps), 2u, "the scene has 2 substeps");
+	for (size_t i = 0; i < json_array_size(substeps); ++i) {
+		json_t *item = json_array_get(substeps, i);
+		cr_assert(json_is_object(item));
+		cr_expect_eq(json_object_size(item), 1u);
+		json_t *sequence = json_object_get(item, "sequence");
+		cr_assert(json_is_array(sequence));
+		cr_expect_gt(json_array_size(sequence), 0u);
+		for (size_t k = 0; k < json_array_size(sequence); ++k)
+			cr_expect(json_is_string(json_array_get(sequence, k)));
+	}
+	// Compact, on one line.
+	cr_expect_eq(strncmp(r.out, "{\"substeps\":[{\"sequence\":[\"", 27), 0, "%s", r.out);
+	cr_expect_eq(strchr(r.out, '\n'), r.out + strlen(r.out) - 1);
+	json_decref(root);
+	free_result(&r);
+
+	const char *text_argv[] = {"plait", "explain", scene};
+	r = run_cli(3, text_argv);
+	cr_expect_eq(r.code, 0, "stderr: %s", r.err);
+	cr_expect(strstr(r.out, "substep") != NULL, "%s", r.out);
+	cr_expect(strstr(r.out, "sheet") != NULL, "%s", r.out);
+	free_result(&r);
+	free(scene);
+	free(dir);
+}
+
+Test(cli_run, bad_arguments_exit_2_with_usage)
+{
+	static const char *const cases[][4] = {
+	    {"plait", "run", "--frobnicate", NULL},
+	    {"plait", "run", "--frames", "-1"},
+	    {"plait", "run", "--frames", "ten"},
+	    {"plait", "run", "--format", "fbx"},
+	    {"plait", "run", "--out", NULL},
+	    {"plait", "dance", NULL, NULL},
+	    {"plait", NULL, NULL, NULL},
+	    {"plait", "explain", "--yaml", NULL},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+		int argc = 0;
+		while (argc < 4 && cases[i][argc] != NULL)
+			++argc;
+		cli_result r = run_cli(argc, (const char **)cases[i]);
+		cr_expect_eq(r.code, 2, "case %zu: exit %d", i, r.code);
+		cr_expect(strstr(r.err, "usage:") != NULL, "case %zu: no usage in: %s", i, r.err);
+		cr_expect_str_eq(r.out, "", "case %zu wrote to stdout", i);
+		free_result(&r);
+	}
+}
+
+Test(cli_run, help_and_version)
+{
+	const char *help[] = {"plait", "--help"};
+	cli_result r = run_cli(2, help);
+	cr_expect_eq(r.code, 0);
+	cr_expect(strstr(r.out, "plait run") != NULL);
+	free_result(&r);
+	const char *run_help[] = {"plait", "run", "--help"};
+	r = run_cli(3, run_help);
+	cr_expect_eq(r.code, 0);
+	cr_expect(strstr(r.out, "--format") != NULL);
+	free_result(&r);
+	const char *version[] = {"plait", "--version"};
+	r = run_cli(2, version);
+	cr_expect_eq(r.code, 0);
+	char expected[64];
+	snprintf(expected, sizeof expected, "plait %d.%d.%d\n", PLAIT_VERSION_MAJOR, PLAIT_VERSION_MINOR,
+	         PLAIT_VERSION_PATCH);
+	cr_expect_str_eq(r.out, expected);
+	free_result(&r);
+}
+
+Test(cli_run, scene_error_exits_1_and_writes_nothing)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, "{\"world\": {\"fps\": -3}, \"objects\": []}");
+	char out_dir[512];
+	snprintf(out_dir, sizeof out_dir, "%s/out", dir);
+	const char *argv[] = {"plait", "run", scene, "--out", out_dir};
+	cli_result r = run_cli(5, argv);
+	cr_expect_eq(r.code, 1);
+	cr_expect(strstr(r.err, "scene.json: world.fps: expected a number > 0, got -3") != NULL, "%s", r.err);
+	cr_expect(!exists(dir, "out"), "the output folder was created for a bad scene");
+	free_result(&r);
+	free(scene);
+	free(dir);
+}
+
+// A world that overflows to infinity: the run stops with exit 1 and keeps the frames before.
+Test(cli_run, simulation_failure_keeps_written_frames)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, "{\"world\": {\"gravity\": [0, -3e38, 0]}, \"frames\": 200, \"objects\": ["
+	                               "{\"name\": \"dot\", \"type\": \"particles\", \"positions\": [[0, 0, 0]],"
+	                               " \"velocities\": [0, -3e38, 0]}]}");
+	const char *argv[] = {"plait", "run", scene, "--out", dir};
+	cli_result r = run_cli(5, argv);
+	if (r.code == 0)
+		cr_skip_test("the solver survived gravity of -3e38 m/s^2 without going non-finite");
+	cr_expect_eq(r.code, 1);
+	cr_expect(strstr(r.err, "the simulation failed") != NULL, "%s", r.err);
+	cr_expect(exists(dir, "dot.0000.obj"));
+	cr_expect(exists(dir, "stats.jsonl"));
+	cr_expect_eq(count_files(dir, ".tmp"), 0);
+	// As many stats lines as frames written.
+	char path[1024];
+	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
+	char *text = read_file(path, NULL);
+	cr_expect_eq(count_lines_starting(text, "{\"frame\""), count_files(dir, ".obj"));
+	free(text);
+	free_result(&r);
+	free(scene);
+	free(dir);
+}
+
+// The installed binary itself: exit codes through a real process.
+Test(cli_run, binary_exit_codes)
+{
+	const char *binary = PLAIT_BINARY_DIR "/tools/plait/plait";
+	struct stat info;
+	if (stat(binary, &info) != 0)
+		cr_skip_test("%s is not built", binary);
+	char command[2048];
+	snprintf(command, sizeof command, "'%s' --version > /dev/null 2>&1", binary);
+	int status = system(command);
+	cr_expect(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+	snprintf(command, sizeof command, "'%s' run --bogus > /dev/null 2>&1", binary);
+	status = system(command);
+	cr_expect(WIFEXITED(status) && WEXITSTATUS(status) == 2);
+	snprintf(command, sizeof command, "'%s' run /nonexistent/scene.json > /dev/null 2>&1", binary);
+	status = system(command);
+	cr_expect(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+}
