@@ -1,5 +1,6 @@
 /* Valid scenes load with the values they give and the API's defaults for the rest. */
 #include "demo_scene.h"
+#include "grid.h"
 #include "scene.h"
 #include "scene_keys.h"
 
@@ -300,8 +301,53 @@ Test(scene_load, every_example_scene_loads_and_builds_a_world)
 	cr_expect_geq(count, 5);
 }
 
-// docs/scene-format.md documents every key the loader accepts, in a table row "| `key` |".
-Test(scene_load, every_key_is_documented)
+// The cells of a docs table row "| `key` | type | default | ...", or false for other lines.
+static bool doc_row(const char *line, char cells[4][96])
+{
+	if (strncmp(line, "| `", 3) != 0)
+		return false;
+	const char *p = line + 1;
+	for (int c = 0; c < 4; ++c) {
+		const char *end = strchr(p, '|');
+		if (end == NULL)
+			return false;
+		while (*p == ' ')
+			++p;
+		size_t n = (size_t)(end - p);
+		while (n > 0 && p[n - 1] == ' ')
+			--n;
+		if (n >= 96)
+			n = 95;
+		memcpy(cells[c], p, n);
+		cells[c][n] = '\0';
+		p = end + 1;
+	}
+	return true;
+}
+
+// Finds the row of key in the table under "<!-- keys: CONTEXT -->".
+static bool doc_find(const char *docs, const char *context, const char *key, char cells[4][96])
+{
+	char marker[64];
+	snprintf(marker, sizeof marker, "<!-- keys: %s -->", context);
+	const char *line = strstr(docs, marker);
+	if (line == NULL)
+		return false;
+	char wanted[80];
+	snprintf(wanted, sizeof wanted, "`%s`", key);
+	for (line = strchr(line, '\n'); line != NULL; line = strchr(line, '\n')) {
+		++line;
+		if (line[0] == '\n' || line[0] == '\0')
+			return false; // end of the table
+		if (doc_row(line, cells) && strcmp(cells[0], wanted) == 0)
+			return true;
+	}
+	return false;
+}
+
+// Every key the loader accepts has a row in its context's table in docs/scene-format.md, and
+// every documented default is the value the loader starts from (plait_default_*_def()).
+Test(scene_load, docs_list_every_key_with_the_api_default)
 {
 	FILE *file = fopen(PLAIT_SOURCE_DIR "/docs/scene-format.md", "rb");
 	cr_assert_not_null(file);
@@ -309,14 +355,81 @@ Test(scene_load, every_key_is_documented)
 	size_t length = fread(docs, 1, sizeof docs - 1, file);
 	fclose(file);
 	docs[length] = '\0';
+
+	plait_scene top = {.frames = PLAIT_SCENE_DEFAULT_FRAMES};
+	plait_world_def world = plait_default_world_def();
+	plait_cloth_def cloth = plait_default_cloth_def();
+	plait_grid_def grid = plait_default_grid_def();
+	plait_curve_def curve = plait_default_curve_def();
+	plait_particles_def particles = plait_default_particles_def();
+	plait_collider_def collider = plait_default_collider_def();
+	plait_scene_keyframe keyframe = {0, plait_identity_transform()};
+	const void *defaults[PLAIT_CONTEXT_COUNT] = {
+	    [PLAIT_CONTEXT_TOP] = &top,
+	    [PLAIT_CONTEXT_WORLD] = &world,
+	    [PLAIT_CONTEXT_WIND] = &world,
+	    [PLAIT_CONTEXT_CLOTH] = &cloth,
+	    [PLAIT_CONTEXT_GRID] = &grid,
+	    [PLAIT_CONTEXT_CURVE] = &curve,
+	    [PLAIT_CONTEXT_PARTICLES] = &particles,
+	    [PLAIT_CONTEXT_COLLIDER] = &collider,
+	    [PLAIT_CONTEXT_KEYFRAME] = &keyframe,
+	};
 	for (int c = 0; c < PLAIT_CONTEXT_COUNT; ++c) {
+		const char *context = plait_scene_context_name((plait_scene_context)c);
 		int count;
 		const plait_scene_key *keys = plait_scene_keys((plait_scene_context)c, &count);
 		for (int i = 0; i < count; ++i) {
-			char row[96];
-			snprintf(row, sizeof row, "| `%s` |", keys[i].name);
-			cr_expect(strstr(docs, row) != NULL, "docs/scene-format.md has no row for %s key `%s`",
-			          plait_scene_context_name((plait_scene_context)c), keys[i].name);
+			const plait_scene_key *k = &keys[i];
+			char cells[4][96];
+			if (!doc_find(docs, context, k->name, cells)) {
+				cr_expect_fail("docs/scene-format.md: no row for `%s` in the %s table", k->name, context);
+				continue;
+			}
+			if (k->kind == PLAIT_KEY_SPECIAL || k->offset == PLAIT_KEY_IGNORED)
+				continue;
+			const char *value = (const char *)defaults[c] + k->offset;
+			const char *doc = cells[2];
+			switch (k->kind) {
+			case PLAIT_KEY_FLOAT: {
+				float actual;
+				memcpy(&actual, value, sizeof actual);
+				char *end;
+				double documented = strtod(doc, &end);
+				cr_expect(end != doc && *end == '\0', "%s.%s: default \"%s\" is not a number", context,
+				          k->name, doc);
+				cr_expect(fabs(documented - actual) <= 1e-6 * fabs(documented) + 1e-12,
+				          "%s.%s: docs say %s, the library's default is %g", context, k->name, doc, actual);
+				break;
+			}
+			case PLAIT_KEY_INT:
+			case PLAIT_KEY_UINT32: {
+				int actual;
+				memcpy(&actual, value, sizeof actual);
+				cr_expect_eq(atoi(doc), actual, "%s.%s: docs say %s, the library's default is %d", context,
+				             k->name, doc, actual);
+				break;
+			}
+			case PLAIT_KEY_BOOL: {
+				bool actual;
+				memcpy(&actual, value, sizeof actual);
+				cr_expect_str_eq(doc, actual ? "true" : "false", "%s.%s", context, k->name);
+				break;
+			}
+			case PLAIT_KEY_VEC3: {
+				plait_vec3 actual;
+				memcpy(&actual, value, sizeof actual);
+				float x, y, z;
+				cr_expect_eq(sscanf(doc, "[%f, %f, %f]", &x, &y, &z), 3,
+				             "%s.%s: default \"%s\" is not [x, y, z]", context, k->name, doc);
+				cr_expect(x == actual.x && y == actual.y && z == actual.z,
+				          "%s.%s: docs say %s, the library's default is [%g, %g, %g]", context, k->name, doc,
+				          actual.x, actual.y, actual.z);
+				break;
+			}
+			case PLAIT_KEY_SPECIAL:
+				break;
+			}
 		}
 	}
 }

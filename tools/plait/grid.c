@@ -3,6 +3,13 @@
 #include <math.h>
 #include <stdlib.h>
 
+plait_grid_def plait_default_grid_def(void)
+{
+	plait_grid_def def = {0};
+	def.normal = (plait_vec3){0.0f, 1.0f, 0.0f};
+	return def;
+}
+
 // Rows of the rotation taking +Y to n (unit length), by Rodrigues' formula.
 static void plait_grid_rotation(plait_vec3 n, float r[3][3])
 {

@@ -13,6 +13,9 @@ typedef struct plait_grid_def {
 	plait_vec3 normal; /* non-zero; need not be normalised */
 } plait_grid_def;
 
+/* center [0, 0, 0], normal +Y; size and resolution have no default. */
+plait_grid_def plait_default_grid_def(void);
+
 /* Builds (nx+1)*(ny+1) vertices and nx*ny quads; vertex (i, j) has index j*(nx+1)+i. For
  * normal +Y, i runs along +X and j along +Z; other normals rotate that layout by the smallest
  * rotation taking +Y to the normal (-Y: half a turn about X). Quads wind counter-clockwise

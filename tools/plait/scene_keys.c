@@ -10,6 +10,7 @@
 #define PLAIT_ANY -INFINITY, INFINITY, false
 #define PLAIT_AT_LEAST(x) (x), INFINITY, false
 #define PLAIT_ABOVE(x) (x), INFINITY, true
+#define PLAIT_ABOVE_UP_TO(a, b) (a), (b), true
 #define PLAIT_BETWEEN(a, b) (a), (b), false
 #define PLAIT_NO_RANGE 0, 0, false
 
@@ -37,7 +38,7 @@
 // Keys every object has; T is the def type of the object.
 #define PLAIT_OBJECT_KEYS(T)                                                                                 \
 	PLAIT_SPECIAL("name", false), PLAIT_SPECIAL("type", true),                                               \
-	    PLAIT_FLOAT("thickness", PLAIT_AT_LEAST(0), T, surface.thickness),                                   \
+	    PLAIT_FLOAT("thickness", PLAIT_BETWEEN(0, 1e6), T, surface.thickness),                               \
 	    PLAIT_FLOAT("friction", PLAIT_BETWEEN(0, 10), T, surface.friction),                                  \
 	    PLAIT_FLOAT("stickiness", PLAIT_BETWEEN(0, 1), T, surface.stickiness),                               \
 	    PLAIT_FLOAT("bounce", PLAIT_BETWEEN(0, 1), T, surface.bounce),                                       \
@@ -52,7 +53,7 @@ static const plait_scene_key plait_top_keys[] = {
 static const plait_scene_key plait_world_keys[] = {
     PLAIT_FLOAT("fps", PLAIT_ABOVE(0), plait_world_def, fps),
     PLAIT_INT("substeps", PLAIT_BETWEEN(1, 1000), plait_world_def, substeps),
-    PLAIT_INT("max_collision_iterations", PLAIT_BETWEEN(0, 10000), plait_world_def, max_collision_iterations),
+    PLAIT_INT("max_collision_iterations", PLAIT_BETWEEN(0, 1000), plait_world_def, max_collision_iterations),
     PLAIT_VEC3("gravity", plait_world_def, gravity),
     PLAIT_FLOAT("air_density", PLAIT_AT_LEAST(0), plait_world_def, air_density),
     PLAIT_SPECIAL("wind", false),
@@ -73,16 +74,17 @@ static const plait_scene_key plait_cloth_keys[] = {
     PLAIT_SPECIAL("grid", false),
     PLAIT_SPECIAL("velocities", false),
     PLAIT_SPECIAL("pins", false),
-    PLAIT_FLOAT("density", PLAIT_ABOVE(0), plait_cloth_def, density),
+    PLAIT_FLOAT("density", PLAIT_ABOVE_UP_TO(0, 1e6), plait_cloth_def, density),
     PLAIT_FLOAT("stretch_resistance", PLAIT_BETWEEN(0, 10000), plait_cloth_def, stretch_resistance),
     PLAIT_FLOAT("compression_resistance", PLAIT_BETWEEN(0, 10000), plait_cloth_def, compression_resistance),
     PLAIT_FLOAT("shear_resistance", PLAIT_BETWEEN(0, 10000), plait_cloth_def, shear_resistance),
     PLAIT_FLOAT("bend_resistance", PLAIT_BETWEEN(0, 10000), plait_cloth_def, bend_resistance),
     PLAIT_FLOAT("rest_length_scale", PLAIT_BETWEEN(0.01, 10), plait_cloth_def, rest_length_scale),
-    PLAIT_FLOAT("drag", PLAIT_AT_LEAST(0), plait_cloth_def, drag),
-    PLAIT_FLOAT("tangential_drag", PLAIT_AT_LEAST(0), plait_cloth_def, tangential_drag),
-    PLAIT_FLOAT("lift", PLAIT_AT_LEAST(0), plait_cloth_def, lift),
+    PLAIT_FLOAT("drag", PLAIT_BETWEEN(0, 1e6), plait_cloth_def, drag),
+    PLAIT_FLOAT("tangential_drag", PLAIT_BETWEEN(0, 1e6), plait_cloth_def, tangential_drag),
+    PLAIT_FLOAT("lift", PLAIT_BETWEEN(0, 1e6), plait_cloth_def, lift),
     PLAIT_FLOAT("damp", PLAIT_BETWEEN(0, 100), plait_cloth_def, damp),
+    PLAIT_INT("iterations", PLAIT_BETWEEN(0, 1000), plait_cloth_def, iterations),
 };
 
 static const plait_scene_key plait_grid_keys[] = {
@@ -97,22 +99,23 @@ static const plait_scene_key plait_curve_keys[] = {
     PLAIT_SPECIAL("positions", true),
     PLAIT_SPECIAL("velocities", false),
     PLAIT_SPECIAL("pins", false),
-    PLAIT_FLOAT("mass", PLAIT_ABOVE(0), plait_curve_def, mass),
+    PLAIT_FLOAT("mass", PLAIT_ABOVE_UP_TO(0, 1e9), plait_curve_def, mass),
     PLAIT_FLOAT("stretch_resistance", PLAIT_BETWEEN(0, 10000), plait_curve_def, stretch_resistance),
     PLAIT_FLOAT("compression_resistance", PLAIT_BETWEEN(0, 10000), plait_curve_def, compression_resistance),
     PLAIT_FLOAT("bend_resistance", PLAIT_BETWEEN(0, 10000), plait_curve_def, bend_resistance),
     PLAIT_FLOAT("rest_length_scale", PLAIT_BETWEEN(0.01, 10), plait_curve_def, rest_length_scale),
-    PLAIT_FLOAT("drag", PLAIT_AT_LEAST(0), plait_curve_def, drag),
+    PLAIT_FLOAT("drag", PLAIT_BETWEEN(0, 1e6), plait_curve_def, drag),
     PLAIT_FLOAT("damp", PLAIT_BETWEEN(0, 100), plait_curve_def, damp),
+    PLAIT_INT("iterations", PLAIT_BETWEEN(0, 1000), plait_curve_def, iterations),
 };
 
 static const plait_scene_key plait_particles_keys[] = {
     PLAIT_OBJECT_KEYS(plait_particles_def),
     PLAIT_SPECIAL("positions", true),
     PLAIT_SPECIAL("velocities", false),
-    PLAIT_FLOAT("mass", PLAIT_ABOVE(0), plait_particles_def, mass),
-    PLAIT_FLOAT("radius", PLAIT_ABOVE(0), plait_particles_def, radius),
-    PLAIT_FLOAT("drag", PLAIT_AT_LEAST(0), plait_particles_def, drag),
+    PLAIT_FLOAT("mass", PLAIT_ABOVE_UP_TO(0, 1e9), plait_particles_def, mass),
+    PLAIT_FLOAT("radius", PLAIT_ABOVE_UP_TO(0, 1e6), plait_particles_def, radius),
+    PLAIT_FLOAT("drag", PLAIT_BETWEEN(0, 1e6), plait_particles_def, drag),
     PLAIT_FLOAT("damp", PLAIT_BETWEEN(0, 100), plait_particles_def, damp),
     PLAIT_BOOL("self_collide", plait_particles_def, self_collide),
 };

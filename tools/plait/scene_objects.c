@@ -59,7 +59,7 @@ static bool plait_parse_grid(plait_scene_loader *loader, const json_t *json, pla
 	plait_scene_reader *r = &loader->reader;
 	int count;
 	const plait_scene_key *keys = plait_scene_keys(PLAIT_CONTEXT_GRID, &count);
-	plait_grid_def grid = {.center = {0.0f, 0.0f, 0.0f}, .normal = {0.0f, 1.0f, 0.0f}};
+	plait_grid_def grid = plait_default_grid_def();
 	if (!plait_reader_expect_object(r, json) || !plait_reader_check_keys(r, json, keys, count) ||
 	    !plait_reader_read_keys(r, json, keys, count, &grid))
 		return false;
