@@ -54,6 +54,24 @@ static char *make_temp_dir(void)
 	return dir;
 }
 
+// rm -r of a test's temporary folder.
+static void remove_tree(const char *path)
+{
+	DIR *dir = opendir(path);
+	if (dir != NULL) {
+		struct dirent *entry;
+		while ((entry = readdir(dir)) != NULL) {
+			if (strcmp(entry->d_name, ".") == 0 || strcmp(entry->d_name, "..") == 0)
+				continue;
+			char child[1024];
+			snprintf(child, sizeof child, "%s/%s", path, entry->d_name);
+			remove_tree(child);
+		}
+		closedir(dir);
+	}
+	remove(path);
+}
+
 static char *write_scene(const char *dir, const char *json)
 {
 	char *path = malloc(strlen(dir) + 32);
@@ -174,6 +192,7 @@ Test(cli_run, obj_output_names_and_contents)
 	cr_expect(strstr(r.out, out_dir) != NULL, "the summary does not say where: %s", r.out);
 	free_result(&r);
 	free(scene);
+	remove_tree(dir);
 	free(dir);
 }
 
@@ -209,6 +228,7 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 	free(text);
 	free_result(&r);
 	free(scene);
+	remove_tree(dir);
 	free(dir);
 }
 
@@ -262,6 +282,7 @@ Test(cli_run, pc2_header_and_sample_count)
 	}
 	free_result(&r);
 	free(scene);
+	remove_tree(dir);
 	free(dir);
 }
 
@@ -303,6 +324,7 @@ Test(cli_run, explain_json_has_the_exact_shape)
 	cr_expect(strstr(r.out, "sheet") != NULL, "%s", r.out);
 	free_result(&r);
 	free(scene);
+	remove_tree(dir);
 	free(dir);
 }
 
@@ -365,6 +387,7 @@ Test(cli_run, scene_error_exits_1_and_writes_nothing)
 	cr_expect(!exists(dir, "out"), "the output folder was created for a bad scene");
 	free_result(&r);
 	free(scene);
+	remove_tree(dir);
 	free(dir);
 }
 
@@ -392,6 +415,7 @@ Test(cli_run, simulation_failure_keeps_written_frames)
 	free(text);
 	free_result(&r);
 	free(scene);
+	remove_tree(dir);
 	free(dir);
 }
 
