@@ -15,11 +15,12 @@
 typedef struct bench_query {
 	plait_ccd_motion motion;
 	double max_time;
+	double minimum_distance;
 	bool truth;
 } bench_query;
 
 typedef struct bench_set {
-	char name[128];
+	char name[512];
 	bool vertex_face;
 	bench_query *queries;
 	int count, capacity;
@@ -98,7 +99,7 @@ static int bench_read_csv(const char *path, bench_set *set, bool gzipped)
 {
 	FILE *file;
 	if (gzipped) {
-		char command[1200];
+		char command[1600];
 		snprintf(command, sizeof(command), "gzip -dc '%s'", path);
 		file = popen(command, "r");
 	} else {
@@ -229,7 +230,7 @@ static void bench_load_scalable(const char *root, bench_sets *all)
 				char stem[256];
 				snprintf(stem, sizeof(stem), "%s", files[f]);
 				*strstr(stem, ".csv") = '\0';
-				char name[300];
+				char name[512];
 				snprintf(name, sizeof(name), "%s/%s", scenes[s], stem);
 				bench_set *set = bench_add_set(all, name, bench_ends_with(stem, "vf"));
 				char file[1500];
@@ -291,6 +292,12 @@ static void bench_load_ipc(const char *root, bench_sets *all)
 		q->truth = strncmp(expected + 10 + strspn(expected + 10, ": "), "true", 4) == 0;
 		cursor = expected;
 		bench_json_number(&cursor, "\"tmax\":", &q->max_time);
+		/* "EE Slow case 1" expects a hit for any ipc-toolkit tolerance from 1e-6 up, which admits near
+		 * misses within that distance (the edges pass 5e-7 apart); ours is a time accuracy only, so
+		 * the case runs with that distance as thickness, as in tests/test_ccd.c. */
+		char *note = strstr(cursor, "\"note\"");
+		if (note && strncmp(note + 6 + strspn(note + 6, ": "), "\"run with tolerances 1e-6", 25) == 0)
+			q->minimum_distance = 1e-6;
 	}
 	free(text);
 }
@@ -317,10 +324,10 @@ static void bench_run_set(const bench_set *set, long *total_queries, double *tot
 		for (int i = 0; i < set->count; i++) {
 			const bench_query *q = &set->queries[i];
 			double toi;
-			hits[i] =
-			    set->vertex_face
-			        ? plait_ccd_vertex_face(&q->motion, 0.0, PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &toi)
-			        : plait_ccd_edge_edge(&q->motion, 0.0, PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &toi);
+			hits[i] = set->vertex_face ? plait_ccd_vertex_face(&q->motion, q->minimum_distance,
+			                                                   PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &toi)
+			                           : plait_ccd_edge_edge(&q->motion, q->minimum_distance,
+			                                                 PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &toi);
 		}
 		seconds[run] = bench_now() - begin;
 	}

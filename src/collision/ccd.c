@@ -642,7 +642,7 @@ static void ccd_examine(const ccd_problem *p, ccd_search *search, ccd_box box)
 
 	/* A certified contact counts only if it moves the cutoff by at least tolerance / 2, so the same
 	 * contact cannot be found over and over. */
-	double contact_time;
+	double contact_time = INFINITY;
 	bool certified = p->distance > 0.0 ? ccd_certify_close_corner(p, &box, &corners, &contact_time)
 	                                   : ccd_certify_root(p, &box, &contact_time);
 	if (certified && contact_time - 0.5 * p->tolerance < search->cutoff) {
