@@ -170,10 +170,12 @@ typedef struct plait_mesh_def {
 typedef struct plait_cloth_def {
 	const char *name;
 	plait_mesh_def mesh;
-	const plait_vec3 *velocities; /* optional initial velocities, m/s in scene units per second */
+	const plait_vec3 *velocities; /* optional initial velocities, scene units per second */
 	float density;                /* kg/m^2, mass spread by area (0.2) */
+	const float *vertex_masses;   /* optional kg per vertex, > 0; replaces density when given */
 	/* Resistances: the stiffness of the material and (scaling relation "link", seed 000 §9) the
-	 * iterations per frame of that kind. 0 turns the constraint off. */
+	 * iterations per frame of that kind. 0 turns the constraint off; the maximum, 10000, makes
+	 * it rigid (zero compliance). */
 	float stretch_resistance;     /* 0..10000 (20) */
 	float compression_resistance; /* 0..10000 (10) */
 	float shear_resistance;       /* 0..10000 (10) */
@@ -183,7 +185,7 @@ typedef struct plait_cloth_def {
 	float tangential_drag;        /* >= 0 (0.01) */
 	float lift;                   /* >= 0 (0.05) */
 	float damp;                   /* velocity damping rate, 1/s, 0..100 (0) */
-	int iterations; /* iterations per frame of each of its kinds; 0 = from the resistance (0) */
+	int iterations; /* stretch and shear iterations per frame; 0 = from the resistances (0) */
 	plait_surface_def surface;
 	const int *pins; /* vertex indices held at their start position (targets settable later) */
 	int pin_count;

@@ -72,6 +72,9 @@ void plait_air_accumulate(plait_sim *sim, double time)
 {
 	plait_particles *p = &sim->particles;
 	const plait_settings *s = &sim->settings;
+	if (p->count == 0) {
+		return;
+	}
 	memset(p->drag_matrix, 0, sizeof(float) * 6 * (size_t)p->count);
 	memset(p->air_force, 0, sizeof(vec3) * (size_t)p->count);
 	float rho = s->air_density;
@@ -94,14 +97,17 @@ void plait_air_accumulate(plait_sim *sim, double time)
 			continue;
 		}
 		vec3 n = v3_scale(normal, 1.0f / twice_area);
-		float area_share = twice_area * 0.5f / 3.0f;
+		/* The weights were set for the rest shape; scale them with the current area. */
+		const float *weight = sim->aero.weight[t];
+		float rest_area = weight[0] + weight[1] + weight[2];
+		float area_scale = rest_area > 0.0f ? 0.5f * twice_area / rest_area : 0.0f;
 		vec3 wind = s->wind_velocity;
 		if (s->wind_noise > 0.0f) {
 			vec3 centroid = v3_scale(v3_add(v3_add(a, b), c), 1.0f / 3.0f);
 			wind = v3_add(wind, wind_noise(sim, centroid, time));
 		}
-		float normal_coefficient = mat->drag * linear_factor * area_share;
-		float tangential_coefficient = mat->tangential_drag * linear_factor * area_share;
+		float normal_coefficient = mat->drag * linear_factor * area_scale;
+		float tangential_coefficient = mat->tangential_drag * linear_factor * area_scale;
 		vec3 lift = v3(0.0f, 0.0f, 0.0f);
 		if (mat->lift > 0.0f) {
 			vec3 v_mean = v3_scale(v3_add(v3_add(p->v[tri[0]], p->v[tri[1]]), p->v[tri[2]]), 1.0f / 3.0f);
@@ -116,7 +122,7 @@ void plait_air_accumulate(plait_sim *sim, double time)
 				}
 				float sine = v3_length(across);
 				if (sine > 1e-6f) {
-					float magnitude = mat->lift * lift_factor * area_share * speed_sq * fabsf(cosine) * sine;
+					float magnitude = mat->lift * lift_factor * area_scale * speed_sq * fabsf(cosine) * sine;
 					lift = v3_scale(across, magnitude / sine);
 				}
 			}
@@ -126,12 +132,12 @@ void plait_air_accumulate(plait_sim *sim, double time)
 			float *drag = p->drag_matrix + 6 * (size_t)i;
 			float before[6];
 			memcpy(before, drag, sizeof before);
-			add_drag_tensor(drag, n, normal_coefficient, tangential_coefficient);
+			add_drag_tensor(drag, n, normal_coefficient * weight[k], tangential_coefficient * weight[k]);
 			float delta[6];
 			for (int e = 0; e < 6; ++e) {
 				delta[e] = drag[e] - before[e];
 			}
-			p->air_force[i] = v3_add(p->air_force[i], v3_add(drag_tensor_apply(delta, wind), lift));
+			p->air_force[i] = v3_add(p->air_force[i], v3_add(drag_tensor_apply(delta, wind), v3_scale(lift, weight[k])));
 		}
 	}
 

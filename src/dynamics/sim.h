@@ -56,7 +56,8 @@ typedef struct plait_particles {
 
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
  * direction: when longer than rest, compliance_tension; when shorter, compliance_compression;
- * INFINITY means no resistance that way. */
+ * a negative compliance (PLAIT_NO_RESISTANCE) means no resistance that way. */
+#define PLAIT_NO_RESISTANCE (-1.0f)
 typedef struct plait_distance_block {
 	int count, capacity;
 	int (*pair)[2];
@@ -84,10 +85,12 @@ typedef struct plait_rod_bend_block {
 	float *lambda;
 } plait_rod_bend_block;
 
-/* Cloth triangles that feel the air. */
+/* Cloth triangles that feel the air. weight[k] is the area (scene units^2) the triangle lends
+ * corner k, chosen so that every vertex's total matches the area its mass was computed from. */
 typedef struct plait_aero_block {
 	int count, capacity;
 	int (*triangle)[3];
+	float (*weight)[3];
 	int *material;
 } plait_aero_block;
 

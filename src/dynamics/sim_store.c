@@ -1,5 +1,7 @@
 #include "dynamics/sim_store.h"
 
+#include "dynamics/batching.h"
+
 #include <string.h>
 
 /* Replaces *array (count_used elements of element_size) with a larger copy of new_capacity. */
@@ -70,6 +72,7 @@ void plait_sim_destroy(plait_sim *sim)
 	FREE_FIELD(sim->rod_bend, compliance);
 	FREE_FIELD(sim->rod_bend, lambda);
 	FREE_FIELD(sim->aero, triangle);
+	FREE_FIELD(sim->aero, weight);
 	FREE_FIELD(sim->aero, material);
 	plait_free(&sim->allocator, sim->materials);
 	plait_free(&sim->allocator, sim->colliders);
@@ -181,6 +184,7 @@ bool plait_sim_reserve_aero(plait_sim *sim, int count)
 	int capacity = next_capacity(b->capacity, needed);
 	const plait_allocator *a = &sim->allocator;
 	bool ok = grow_array(a, (void **)&b->triangle, sizeof *b->triangle, b->count, capacity) &&
+	          grow_array(a, (void **)&b->weight, sizeof *b->weight, b->count, capacity) &&
 	          grow_array(a, (void **)&b->material, sizeof(int), b->count, capacity);
 	if (ok) {
 		b->capacity = capacity;
@@ -340,10 +344,70 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 			continue;
 		}
 		memcpy(aero->triangle[aero_kept], t, sizeof t);
+		memcpy(aero->weight[aero_kept], aero->weight[c], sizeof aero->weight[c]);
 		aero->material[aero_kept] = aero->material[c];
 		++aero_kept;
 	}
 	aero->count = aero_kept;
 	plait_free(&sim->allocator, remap);
 	return true;
+}
+
+#define BATCH_WIDTH 8
+#define BATCH_WINDOW 64
+
+/* Applies order (indices relative to first) to count elements of size bytes at data + first. */
+static bool permute(const plait_allocator *allocator, void *data, size_t size, int first, int count, const int *order)
+{
+	char *scratch = plait_alloc(allocator, size * (size_t)count);
+	if (scratch == NULL) {
+		return false;
+	}
+	char *base = (char *)data + size * (size_t)first;
+	for (int k = 0; k < count; ++k) {
+		memcpy(scratch + size * (size_t)k, base + size * (size_t)order[k], size);
+	}
+	memcpy(base, scratch, size * (size_t)count);
+	plait_free(allocator, scratch);
+	return true;
+}
+
+bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first)
+{
+	int count = b->count - first;
+	if (count <= 1) {
+		return true;
+	}
+	const plait_allocator *a = &sim->allocator;
+	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
+	if (order == NULL) {
+		return false;
+	}
+	bool ok = plait_batch_order(a, &b->pair[first][0], 2, count, BATCH_WIDTH, BATCH_WINDOW, order) &&
+	          permute(a, b->pair, sizeof *b->pair, first, count, order) &&
+	          permute(a, b->rest, sizeof(float), first, count, order) &&
+	          permute(a, b->compliance_tension, sizeof(float), first, count, order) &&
+	          permute(a, b->compliance_compression, sizeof(float), first, count, order);
+	plait_free(a, order);
+	return ok;
+}
+
+bool plait_sim_batch_bend(plait_sim *sim, int first)
+{
+	plait_bend_block *b = &sim->bend;
+	int count = b->count - first;
+	if (count <= 1) {
+		return true;
+	}
+	const plait_allocator *a = &sim->allocator;
+	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
+	if (order == NULL) {
+		return false;
+	}
+	bool ok = plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order) &&
+	          permute(a, b->quad, sizeof *b->quad, first, count, order) &&
+	          permute(a, b->rest_angle, sizeof(float), first, count, order) &&
+	          permute(a, b->compliance, sizeof(float), first, count, order);
+	plait_free(a, order);
+	return ok;
 }

@@ -37,36 +37,50 @@ plait_result plait_sim_update_schedule(plait_sim *sim, plait_error *error)
 	return result;
 }
 
+static void clear_floats(float *values, int count)
+{
+	if (count > 0) {
+		memset(values, 0, sizeof(float) * (size_t)count);
+	}
+}
+
 static void reset_multipliers(plait_sim *sim)
 {
-	memset(sim->stretch.lambda, 0, sizeof(float) * (size_t)sim->stretch.count);
-	memset(sim->shear.lambda, 0, sizeof(float) * (size_t)sim->shear.count);
-	memset(sim->bend.lambda, 0, sizeof(float) * (size_t)sim->bend.count);
-	memset(sim->rod_bend.lambda, 0, sizeof(float) * (size_t)sim->rod_bend.count);
+	clear_floats(sim->stretch.lambda, sim->stretch.count);
+	clear_floats(sim->shear.lambda, sim->shear.count);
+	clear_floats(sim->bend.lambda, sim->bend.count);
+	clear_floats(sim->rod_bend.lambda, sim->rod_bend.count);
 }
 
 /* Start of a substep: pinned particles move to their interpolated targets, free ones to
- * their predicted positions x + h v. */
+ * their predicted positions. v already holds the end-of-substep velocity (gravity and air
+ * applied); moving with v - h g / 2, the mean velocity over the substep under constant gravity,
+ * makes free flight exact (x0 + v0 t + g t^2 / 2) instead of off by g h t / 2. */
 static void predict_positions(plait_sim *sim, float h, float t_end)
 {
 	plait_particles *p = &sim->particles;
+	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
 	for (int i = 0; i < p->count; ++i) {
 		p->x_prev[i] = p->x[i];
 		p->v_pre[i] = p->v[i];
 		if (p->w[i] == 0.0f) {
 			p->x[i] = v3_lerp(p->pin_start[i], p->pin_end[i], t_end);
 		} else {
-			p->x[i] = v3_mul_add(p->x[i], h, p->v[i]);
+			p->x[i] = v3_mul_add(p->x[i], h, v3_sub(p->v[i], half_gravity_step));
 		}
 	}
 }
 
+/* v = (x - x_prev) / h is the mean velocity of the substep; adding h g / 2 back gives the
+ * velocity at its end (the inverse of the prediction above). */
 static void update_velocities(plait_sim *sim, float h)
 {
 	plait_particles *p = &sim->particles;
 	float inverse_h = 1.0f / h;
+	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
 	for (int i = 0; i < p->count; ++i) {
-		p->v[i] = v3_scale(v3_sub(p->x[i], p->x_prev[i]), inverse_h);
+		vec3 mean = v3_scale(v3_sub(p->x[i], p->x_prev[i]), inverse_h);
+		p->v[i] = p->w[i] > 0.0f ? v3_add(mean, half_gravity_step) : mean;
 	}
 }
 
@@ -122,8 +136,10 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 	sim->contacts = 0;
 	sim->constraint_solves = 0;
 
-	memcpy(p->x_frame, p->x, sizeof(vec3) * (size_t)p->count);
-	memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
+	if (p->count > 0) {
+		memcpy(p->x_frame, p->x, sizeof(vec3) * (size_t)p->count);
+		memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
+	}
 	for (int s = 0; s < substeps; ++s) {
 		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;
 		sim->substep = s;

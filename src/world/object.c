@@ -85,9 +85,20 @@ static int resistance_importance(float resistance)
 	return ceiling > (float)PLAIT_MAX_IMPORTANCE ? PLAIT_MAX_IMPORTANCE : (int)ceiling;
 }
 
+/* Compliance (1/stiffness) of a resistance: 0 turns the constraint off (infinite compliance),
+ * the maximum makes it rigid. */
 static float stiffness_compliance(float resistance, float per_resistance)
 {
-	return resistance > 0.0f ? 1.0f / (resistance * per_resistance) : INFINITY;
+	if (resistance >= MAX_RESISTANCE) {
+		return 0.0f;
+	}
+	return resistance > 0.0f ? 1.0f / (resistance * per_resistance) : PLAIT_NO_RESISTANCE;
+}
+
+/* Scales a compliance, keeping "no resistance" as it is. */
+static float scale_compliance(float compliance, float factor)
+{
+	return compliance < 0.0f ? PLAIT_NO_RESISTANCE : compliance * factor;
 }
 
 static int add_material(plait_sim *sim, int object, plait_object_type type, const plait_surface_def *surface,
@@ -165,6 +176,13 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	    check_pins(error, label, def->pins, def->pin_count, mesh->vertex_count) != PLAIT_OK) {
 		return id;
 	}
+	for (int i = 0; def->vertex_masses != NULL && i < mesh->vertex_count; ++i) {
+		if (!(def->vertex_masses[i] > 0.0f) || !isfinite(def->vertex_masses[i])) {
+			plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: vertex_masses[%d] must be > 0, got %g", label, i,
+			                (double)def->vertex_masses[i]);
+			return id;
+		}
+	}
 
 	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_CLOTH, def->name, &id);
 	if (object == NULL) {
@@ -216,10 +234,17 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		float area = 0.5f * v3_length(v3_cross(v3_sub(x[tri[1]], x[tri[0]]), v3_sub(x[tri[2]], x[tri[0]])));
 		triangle_area[t] = area;
 		polygon_area[topology->triangle_polygon[t]] += area;
-		for (int k = 0; k < 3; ++k) {
-			vertex_area[tri[k]] += area / 3.0f;
-		}
 		total_area += area;
+	}
+	/* Each polygon gives an equal share of its area to its corners: a quad's mass does not
+	 * depend on which diagonal fanned it (a third per triangle would make one corner of a
+	 * quad grid twice as heavy as the opposite one). */
+	for (int f = 0; f < topology->polygon_count; ++f) {
+		int size = topology->polygon_sizes[f];
+		const int *polygon = topology->polygon_indices + topology->polygon_starts[f];
+		for (int k = 0; k < size; ++k) {
+			vertex_area[polygon[k]] += polygon_area[f] / (float)size;
+		}
 	}
 	float scale = world->def.space_scale;
 	float mean_vertex_area = total_area / (float)vertex_count;
@@ -237,7 +262,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	for (int i = 0; i < vertex_count; ++i) {
 		/* A vertex on no triangle still needs a mass: give it an average vertex's. */
 		float area = vertex_area[i] > 0.0f ? vertex_area[i] : mean_vertex_area;
-		float mass = def->density * area * scale * scale;
+		float mass = def->vertex_masses != NULL ? def->vertex_masses[i] : def->density * area * scale * scale;
 		if (!(mass > 0.0f)) {
 			mass = 1e-6f;
 		}
@@ -247,6 +272,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	int first = object->first_particle;
 	apply_pins(sim, first, def->pins, def->pin_count);
 
+	int first_stretch = sim->stretch.count, first_shear = sim->shear.count, first_bend = sim->bend.count;
 	/* Stretch and compression on polygon edges (and fan diagonals of polygons larger than
 	 * quads); shear on both diagonals of each quad (seed 003: separate shear). */
 	float stretch_alpha = stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
@@ -268,9 +294,9 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 			continue;
 		}
 		float rest = v3_length(v3_sub(x[v1], x[v0]));
-		float ratio = edge_area > 0.0f ? rest * rest / edge_area : 1.0f;
+		float ratio = edge_area > 0.0f && rest > 0.0f ? rest * rest / edge_area : 1.0f;
 		plait_sim_add_distance(&sim->stretch, first + v0, first + v1, rest * def->rest_length_scale,
-		                       stretch_alpha * ratio, compression_alpha * ratio);
+		                       scale_compliance(stretch_alpha, ratio), scale_compliance(compression_alpha, ratio));
 	}
 	if (def->shear_resistance > 0.0f) {
 		for (int f = 0; f < topology->polygon_count; ++f) {
@@ -282,9 +308,9 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 				int v0 = q[k], v1 = q[k + 2];
 				float rest = v3_length(v3_sub(x[v1], x[v0]));
 				float edge_area = 0.5f * polygon_area[f];
-				float ratio = edge_area > 0.0f ? rest * rest / edge_area : 1.0f;
+				float ratio = edge_area > 0.0f && rest > 0.0f ? rest * rest / edge_area : 1.0f;
 				plait_sim_add_distance(&sim->shear, first + v0, first + v1, rest * def->rest_length_scale,
-				                       shear_alpha * ratio, shear_alpha * ratio);
+				                       scale_compliance(shear_alpha, ratio), scale_compliance(shear_alpha, ratio));
 			}
 		}
 	}
@@ -328,23 +354,57 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 			sim->bend.lambda[c] = 0.0f;
 		}
 	}
-	for (int t = 0; t < topology->triangle_count; ++t) {
-		int c = sim->aero.count++;
+	/* Air acts on triangles but mass comes from polygons: triangle t of polygon P lends corner
+	 * v the part A_t / S_v of the share A_P / n that v owns in P, where S_v is the area of the
+	 * triangles of P touching v; each vertex then feels air on exactly the area it weighs. */
+	float *exposure = plait_alloc_zero(a, (size_t)vertex_count, sizeof(float));
+	for (int t = 0; t < topology->triangle_count && exposure != NULL; ++t) {
 		for (int k = 0; k < 3; ++k) {
-			sim->aero.triangle[c][k] = first + topology->triangles[t][k];
+			exposure[topology->triangles[t][k]] += triangle_area[t];
 		}
-		sim->aero.material[c] = material;
 	}
+	int polygon_start_triangle = 0;
+	for (int f = 0; f < topology->polygon_count; ++f) {
+		int size = topology->polygon_sizes[f];
+		int triangles = size - 2;
+		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles && exposure != NULL; ++t) {
+			for (int k = 0; k < 3; ++k) {
+				exposure[topology->triangles[t][k]] = 0.0f;
+			}
+		}
+		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles && exposure != NULL; ++t) {
+			for (int k = 0; k < 3; ++k) {
+				exposure[topology->triangles[t][k]] += triangle_area[t];
+			}
+		}
+		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles; ++t) {
+			int c = sim->aero.count++;
+			for (int k = 0; k < 3; ++k) {
+				int v = topology->triangles[t][k];
+				float share = polygon_area[f] / (float)size;
+				float s_v = exposure != NULL ? exposure[v] : 0.0f;
+				sim->aero.triangle[c][k] = first + v;
+				sim->aero.weight[c][k] = s_v > 0.0f ? triangle_area[t] * share / s_v : triangle_area[t] / 3.0f;
+			}
+			sim->aero.material[c] = material;
+		}
+		polygon_start_triangle += triangles;
+	}
+	plait_free(a, exposure);
 	plait_free(a, polygon_area);
 	plait_free(a, triangle_area);
 	plait_free(a, vertex_area);
+	/* Out of memory here only loses speed, never correctness: the order stays as built. */
+	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
+	plait_sim_batch_distance(sim, &sim->shear, first_shear);
+	plait_sim_batch_bend(sim, first_bend);
 
 	int override = def->iterations;
 	object->importance[PLAIT_KIND_STRETCH] =
 	    override > 0 ? override
 	                 : resistance_importance(fmaxf(def->stretch_resistance, def->compression_resistance));
 	object->importance[PLAIT_KIND_SHEAR] = override > 0 ? override : resistance_importance(def->shear_resistance);
-	object->importance[PLAIT_KIND_BEND] = override > 0 ? override : resistance_importance(def->bend_resistance);
+	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	plait_world_update_kinds(world);
 	return id;
 }
@@ -418,13 +478,14 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 
 	const plait_vec3 *x = def->positions;
 	if (def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f) {
-		float axial_tension = def->stretch_resistance * STRETCH_STIFFNESS_PER_RESISTANCE / scale;
-		float axial_compression = def->compression_resistance * STRETCH_STIFFNESS_PER_RESISTANCE / scale;
+		/* alpha = L / EA with EA = R * 100 N, converted to scene units by 1 / space_scale. */
+		float tension_alpha = stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE / scale);
+		float compression_alpha =
+		    stiffness_compliance(def->compression_resistance, STRETCH_STIFFNESS_PER_RESISTANCE / scale);
 		for (int i = 0; i + 1 < n; ++i) {
 			float rest = v3_length(v3_sub(x[i + 1], x[i]));
 			plait_sim_add_distance(&sim->stretch, first + i, first + i + 1, rest * def->rest_length_scale,
-			                       axial_tension > 0.0f ? rest / axial_tension : INFINITY,
-			                       axial_compression > 0.0f ? rest / axial_compression : INFINITY);
+			                       scale_compliance(tension_alpha, rest), scale_compliance(compression_alpha, rest));
 		}
 	}
 	if (def->bend_resistance > 0.0f) {
@@ -445,7 +506,7 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	object->importance[PLAIT_KIND_STRETCH] =
 	    override > 0 ? override
 	                 : resistance_importance(fmaxf(def->stretch_resistance, def->compression_resistance));
-	object->importance[PLAIT_KIND_BEND] = override > 0 ? override : resistance_importance(def->bend_resistance);
+	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	plait_world_update_kinds(world);
 	return id;
 }

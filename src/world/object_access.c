@@ -160,7 +160,9 @@ plait_result plait_object_get_positions(plait_object_id id, int first, int count
 	if (object == NULL) {
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
-	memcpy(out, id.world->sim.particles.x + object->first_particle + first, sizeof(plait_vec3) * (size_t)count);
+	if (count > 0) {
+		memcpy(out, id.world->sim.particles.x + object->first_particle + first, sizeof(plait_vec3) * (size_t)count);
+	}
 	return PLAIT_OK;
 }
 
@@ -171,7 +173,9 @@ plait_result plait_object_get_velocities(plait_object_id id, int first, int coun
 	if (object == NULL) {
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
-	memcpy(out, id.world->sim.particles.v + object->first_particle + first, sizeof(plait_vec3) * (size_t)count);
+	if (count > 0) {
+		memcpy(out, id.world->sim.particles.v + object->first_particle + first, sizeof(plait_vec3) * (size_t)count);
+	}
 	return PLAIT_OK;
 }
 
@@ -217,7 +221,9 @@ plait_result plait_object_set_velocities(plait_object_id id, int first, int coun
 	if (!all_finite(velocities, count)) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': velocities must be finite", object->name);
 	}
-	memcpy(id.world->sim.particles.v + object->first_particle + first, velocities, sizeof(plait_vec3) * (size_t)count);
+	if (count > 0) {
+		memcpy(id.world->sim.particles.v + object->first_particle + first, velocities, sizeof(plait_vec3) * (size_t)count);
+	}
 	return PLAIT_OK;
 }
 
