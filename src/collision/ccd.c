@@ -34,8 +34,6 @@ enum { CCD_T, CCD_U, CCD_V };
 #define CCD_NEWTON_ITERATIONS 8
 /* Half-width in u and v of the box that certifies a root, unless rounding needs more. */
 #define CCD_CERTIFY_RADIUS 0x1p-24
-/* Rounds of Bezier clipping in t per box. */
-#define CCD_CLIP_ROUNDS 4
 
 typedef struct ccd_problem {
 	/* F at t = s is e[s] + u g[s] + v h[s]; F(t) = F(0) + t (F(1) - F(0)). */
@@ -292,7 +290,7 @@ static double ccd_crossing(int i, double yi, int j, double yj, double y)
 /* Narrows [*a, *b] to a subinterval holding every t in it with |c(t)| <= band (Bezier clipping): the
  * cubic lies in the convex hull of its control points (a + i (b - a) / 3, beta_i), so it can only
  * reach the band where that hull does. Returns false when it nowhere does: no contact then. */
-static bool ccd_clip_time_once(const ccd_problem *p, double *a, double *b)
+static bool ccd_clip_time(const ccd_problem *p, double *a, double *b)
 {
 	double beta[4];
 	ccd_cubic_on(p, *a, *b, beta);
@@ -324,19 +322,6 @@ static bool ccd_clip_time_once(const ccd_problem *p, double *a, double *b)
 	double new_a = *a + width * (lo / 3.0) - margin, new_b = *a + width * (hi / 3.0) + margin;
 	*a = ccd_max(*a, new_a);
 	*b = ccd_min(*b, new_b);
-	return true;
-}
-
-/* Clips repeatedly while that pays: Bezier clipping converges fast near a simple root. */
-static bool ccd_clip_time(const ccd_problem *p, double *a, double *b)
-{
-	for (int round = 0; round < CCD_CLIP_ROUNDS; round++) {
-		double width = *b - *a;
-		if (!ccd_clip_time_once(p, a, b))
-			return false;
-		if (*b - *a > 0.5 * width)
-			break;
-	}
 	return true;
 }
 

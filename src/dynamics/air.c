@@ -77,6 +77,7 @@ void plait_air_accumulate(plait_sim *sim, double time)
 	}
 	memset(p->drag_matrix, 0, sizeof(float) * 6 * (size_t)p->count);
 	memset(p->air_force, 0, sizeof(vec3) * (size_t)p->count);
+	memset(p->lift_force, 0, sizeof(vec3) * (size_t)p->count);
 	float rho = s->air_density;
 	float scale = s->space_scale;
 	/* Force (scene units) per unit scene velocity for a coefficient c on area A (scene units):
@@ -137,7 +138,8 @@ void plait_air_accumulate(plait_sim *sim, double time)
 			for (int e = 0; e < 6; ++e) {
 				delta[e] = drag[e] - before[e];
 			}
-			p->air_force[i] = v3_add(p->air_force[i], v3_add(drag_tensor_apply(delta, wind), v3_scale(lift, weight[k])));
+			p->air_force[i] = v3_add(p->air_force[i], drag_tensor_apply(delta, wind));
+			p->lift_force[i] = v3_mul_add(p->lift_force[i], weight[k], lift);
 		}
 	}
 
@@ -187,7 +189,17 @@ void plait_integrate_velocities(plait_sim *sim, float h, bool air)
 		if (air) {
 			float mass = p->mass[i];
 			const float *k = p->drag_matrix + 6 * (size_t)i;
-			vec3 rhs = v3_add(v3_scale(v, mass), v3_scale(v3_add(v3_scale(gravity, mass), p->air_force[i]), h));
+			/* Lift grows with the square of the relative air speed while drag grows linearly, so
+			 * an explicit lift can pump energy (seed 000 §5.3). One substep of lift may change
+			 * the velocity by at most half the air speed relative to the vertex. */
+			vec3 lift_change = v3_scale(p->lift_force[i], h / mass);
+			float limit = 0.5f * v3_length(v3_sub(sim->settings.wind_velocity, v));
+			float change = v3_length(lift_change);
+			if (change > limit) {
+				lift_change = v3_scale(lift_change, limit / change);
+			}
+			vec3 rhs = v3_add(v3_scale(v3_add(v, lift_change), mass),
+			                  v3_scale(v3_add(v3_scale(gravity, mass), p->air_force[i]), h));
 			v = solve_implicit_drag(mass, h, k, rhs);
 		} else {
 			v = v3_mul_add(v, h, gravity);

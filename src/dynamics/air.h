@@ -15,6 +15,9 @@
  *
  * Drag is integrated implicitly per vertex: with K the vertex's summed drag tensor (kg/s),
  * (m I + h K) v' = m v + h (m g + K w + F_lift), stable for any drag, exact at terminal speed.
+ * Lift, quadratic in speed, stays explicit; one substep of it may change a vertex's velocity by
+ * at most half the air speed relative to the vertex, which keeps strong lift from pumping
+ * energy (seed 000 §5.3 warns of exactly that) and never binds in ordinary scenes.
  * Wind noise adds to each triangle's wind a smooth random vector of length up to
  * noise * speed, varying over 0.5 m cells and 0.25 s. */
 #ifndef PLAIT_DYNAMICS_AIR_H

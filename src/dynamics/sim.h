@@ -50,7 +50,8 @@ typedef struct plait_particles {
 	vec3 *contact_velocity;    /* velocity of the touched surface */
 	float *contact_bounce, *contact_stickiness;
 	float *drag_matrix;        /* 6 per particle: symmetric implicit air drag (kg/s) */
-	vec3 *air_force;           /* explicit air force (N in scene units) */
+	vec3 *air_force;           /* explicit air force toward the wind (N in scene units) */
+	vec3 *lift_force;          /* lift (N in scene units), limited when integrated */
 	vec3 *x_frame, *v_frame;   /* state at the start of the frame, restored if it fails */
 } plait_particles;
 

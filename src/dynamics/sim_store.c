@@ -43,7 +43,7 @@ static void free_particles(plait_sim *sim)
 	                  p->radius,    p->material,       p->flags,
 	                  p->pin_start, p->pin_end,        p->contact_normal,
 	                  p->contact_velocity, p->contact_bounce, p->contact_stickiness,
-	                  p->drag_matrix, p->air_force, p->x_frame, p->v_frame};
+	                  p->drag_matrix, p->air_force, p->lift_force, p->x_frame, p->v_frame};
 	for (size_t k = 0; k < sizeof fields / sizeof fields[0]; ++k) {
 		plait_free(&sim->allocator, fields[k]);
 	}
@@ -109,6 +109,7 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 	          grow_array(a, (void **)&p->contact_stickiness, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->drag_matrix, 6 * sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->air_force, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->lift_force, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->x_frame, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->v_frame, sizeof(vec3), n, capacity);
 	if (ok) {
