@@ -1,0 +1,268 @@
+/* The public API: defaults, ids, and every failure returning a readable message. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_support.h"
+
+#define ASSERT_MESSAGE(error, text) \
+	cr_assert(strstr((error).message, (text)) != NULL, "message \"%s\" lacks \"%s\"", (error).message, (text))
+
+Test(api, world_def_is_validated)
+{
+	plait_error error;
+	plait_world_def def = plait_default_world_def();
+	def.substeps = 0;
+	cr_assert(plait_world_id_is_null(plait_create_world(&def, &error)));
+	cr_assert_eq(error.code, PLAIT_ERROR_INVALID_ARGUMENT);
+	ASSERT_MESSAGE(error, "substeps must be in 1..1000, got 0");
+	def = plait_default_world_def();
+	def.fps = -24.0f;
+	cr_assert(plait_world_id_is_null(plait_create_world(&def, &error)));
+	ASSERT_MESSAGE(error, "fps must be > 0");
+	def = plait_default_world_def();
+	def.space_scale = 0.0f;
+	cr_assert(plait_world_id_is_null(plait_create_world(&def, &error)));
+	ASSERT_MESSAGE(error, "space_scale");
+	plait_world_def uninitialised;
+	memset(&uninitialised, 0, sizeof uninitialised);
+	cr_assert(plait_world_id_is_null(plait_create_world(&uninitialised, &error)));
+	ASSERT_MESSAGE(error, "plait_default_world_def");
+}
+
+Test(api, defaults_are_the_documented_ones)
+{
+	plait_world_def w = plait_default_world_def();
+	cr_assert_eq(w.fps, 24.0f);
+	cr_assert_eq(w.substeps, 3);
+	cr_assert_eq(w.max_collision_iterations, 4);
+	cr_assert_eq(w.gravity.y, -9.81f);
+	cr_assert_eq(w.space_scale, 1.0f);
+	plait_cloth_def c = plait_default_cloth_def();
+	cr_assert_eq(c.stretch_resistance, 20.0f);
+	cr_assert_eq(c.rest_length_scale, 1.0f);
+	cr_assert(c.surface.collide);
+}
+
+Test(api, object_errors_name_the_object_and_field)
+{
+	plait_world_id world = plait_create_world(&(plait_world_def){0}, NULL);
+	cr_assert(plait_world_id_is_null(world));
+	plait_world_def wdef = plait_default_world_def();
+	world = plait_create_world(&wdef, NULL);
+	test_grid grid = test_grid_make(2, 2, 1.0f, 1.0f);
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.name = "shirt";
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.stretch_resistance = -1.0f;
+	plait_error error;
+	cr_assert(plait_object_id_is_null(plait_create_cloth(world, &cloth, &error)));
+	ASSERT_MESSAGE(error, "cloth 'shirt': stretch_resistance must be in 0..10000, got -1");
+	cloth.stretch_resistance = 20.0f;
+	int bad_pin = 99;
+	cloth.pins = &bad_pin;
+	cloth.pin_count = 1;
+	cr_assert(plait_object_id_is_null(plait_create_cloth(world, &cloth, &error)));
+	ASSERT_MESSAGE(error, "pin 0 is vertex 99");
+	cloth.pin_count = 0;
+	grid.positions[3].x = NAN;
+	cr_assert(plait_object_id_is_null(plait_create_cloth(world, &cloth, &error)));
+	cr_assert_eq(error.code, PLAIT_ERROR_INVALID_MESH);
+	ASSERT_MESSAGE(error, "positions[3] is not finite");
+	grid.positions[3].x = 0.0f;
+	grid.face_indices[2] = 42;
+	cr_assert(plait_object_id_is_null(plait_create_cloth(world, &cloth, &error)));
+	ASSERT_MESSAGE(error, "vertex index 42");
+	/* Nothing half-made: the failed creations left no object behind. */
+	cr_assert_eq(plait_world_get_object_count(world), 0);
+
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.name = "ball";
+	sphere.shape = PLAIT_SHAPE_SPHERE;
+	sphere.radius = -2.0f;
+	cr_assert(plait_object_id_is_null(plait_create_collider(world, &sphere, &error)));
+	ASSERT_MESSAGE(error, "collider 'ball': a sphere needs");
+	sphere.shape = PLAIT_SHAPE_MESH;
+	cr_assert(plait_object_id_is_null(plait_create_collider(world, &sphere, &error)));
+	ASSERT_MESSAGE(error, "not supported yet");
+
+	plait_curve_def curve = plait_default_curve_def();
+	plait_vec3 one = {0, 0, 0};
+	curve.positions = &one;
+	curve.vertex_count = 1;
+	cr_assert(plait_object_id_is_null(plait_create_curve(world, &curve, &error)));
+	ASSERT_MESSAGE(error, "at least 2 vertices");
+
+	plait_particles_def particles = plait_default_particles_def();
+	particles.positions = &one;
+	particles.count = 1;
+	particles.radius = 0.0f;
+	cr_assert(plait_object_id_is_null(plait_create_particles(world, &particles, &error)));
+	ASSERT_MESSAGE(error, "radius");
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+}
+
+Test(api, ids_go_stale_when_destroyed_and_others_keep_working)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_vec3 a[3] = {{0, 1, 0}, {1, 1, 0}, {2, 1, 0}};
+	plait_vec3 b[2] = {{0, 5, 0}, {1, 5, 0}};
+	plait_particles_def def = plait_default_particles_def();
+	def.positions = a;
+	def.count = 3;
+	def.name = "first";
+	plait_object_id first = plait_create_particles(world, &def, NULL);
+	def.positions = b;
+	def.count = 2;
+	def.name = "second";
+	plait_object_id second = plait_create_particles(world, &def, NULL);
+	cr_assert_str_eq(plait_object_get_name(second), "second");
+	cr_assert_eq(plait_world_get_object_count(world), 2);
+	plait_destroy_object(first);
+	cr_assert_not(plait_object_is_valid(first));
+	plait_error error;
+	plait_vec3 out[3];
+	cr_assert_eq(plait_object_get_positions(first, 0, 1, out, &error), PLAIT_ERROR_INVALID_ID);
+	ASSERT_MESSAGE(error, "stale");
+	/* The survivor still reads its own particles. */
+	cr_assert_eq(plait_object_get_positions(second, 0, 2, out, &error), PLAIT_OK);
+	cr_assert_eq(out[1].x, 1.0f);
+	cr_assert_eq(out[1].y, 5.0f);
+	cr_assert_eq(plait_world_get_object_count(world), 1);
+	cr_assert_eq(plait_world_get_object(world, 0).index1, second.index1);
+	cr_assert(test_step_frames(world, 2));
+	/* Range errors say what was wrong. */
+	cr_assert_eq(plait_object_get_positions(second, 1, 5, out, &error), PLAIT_ERROR_INVALID_ARGUMENT);
+	ASSERT_MESSAGE(error, "outside its 2 vertices");
+	plait_destroy_world(world);
+}
+
+Test(api, positions_velocities_and_pins_round_trip)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.gravity = (plait_vec3){0, 0, 0};
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_vec3 x[2] = {{0, 0, 0}, {1, 0, 0}};
+	plait_particles_def def = plait_default_particles_def();
+	def.positions = x;
+	def.count = 2;
+	def.surface.collide = false;
+	plait_object_id id = plait_create_particles(world, &def, NULL);
+	plait_vec3 v[2] = {{1, 0, 0}, {0, 2, 0}};
+	cr_assert_eq(plait_object_set_velocities(id, 0, 2, v, NULL), PLAIT_OK);
+	cr_assert(test_step_frames(world, 24));
+	plait_vec3 out[2];
+	plait_object_get_positions(id, 0, 2, out, NULL);
+	cr_assert_float_eq(out[0].x, 1.0f, 1e-4f);
+	cr_assert_float_eq(out[1].y, 2.0f, 1e-4f);
+	/* A pinned vertex follows its target, interpolated over the frame. */
+	cr_assert_eq(plait_object_pin_vertex(id, 0, (plait_vec3){5, 0, 0}, NULL), PLAIT_OK);
+	cr_assert(test_step_frames(world, 1));
+	plait_object_get_positions(id, 0, 1, out, NULL);
+	cr_assert_float_eq(out[0].x, 5.0f, 1e-5f);
+	plait_error error;
+	cr_assert_eq(plait_object_set_pin_target(id, 1, (plait_vec3){0, 0, 0}, &error), PLAIT_ERROR_INVALID_ARGUMENT);
+	ASSERT_MESSAGE(error, "not pinned");
+	plait_destroy_world(world);
+}
+
+Test(api, keyframed_collider_sweeps_particles_along)
+{
+	/* A box moving sideways pushes a resting particle (space-time: it is hit inside the frame). */
+	plait_world_def wdef = plait_default_world_def();
+	wdef.gravity = (plait_vec3){0, 0, 0};
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_collider_def box = plait_default_collider_def();
+	box.shape = PLAIT_SHAPE_BOX;
+	box.center = (plait_vec3){-1.0f, 0, 0};
+	box.size = (plait_vec3){0.2f, 1.0f, 1.0f};
+	plait_object_id box_id = plait_create_collider(world, &box, NULL);
+	plait_vec3 x = {0, 0, 0};
+	plait_particles_def def = plait_default_particles_def();
+	def.positions = &x;
+	def.count = 1;
+	def.radius = 0.05f;
+	plait_object_id p = plait_create_particles(world, &def, NULL);
+	for (int frame = 1; frame <= 10; ++frame) {
+		plait_transform t = plait_identity_transform();
+		t.translate.x = 0.2f * (float)frame;
+		cr_assert_eq(plait_collider_set_transform(box_id, t, NULL), PLAIT_OK);
+		cr_assert(test_step_frames(world, 1));
+	}
+	plait_vec3 out;
+	plait_object_get_positions(p, 0, 1, &out, NULL);
+	/* The box's right face ends at -1 + 0.1 + 2 = 1.1; the particle is in front of it. */
+	cr_assert_geq(out.x, 1.1f + 0.05f - 1e-3f, "particle at x = %g", (double)out.x);
+	cr_assert_eq(plait_world_get_stats(world).penetrations, 0);
+	plait_destroy_world(world);
+}
+
+Test(api, schedule_is_readable_through_the_api)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.substeps = 10;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	test_grid grid = test_grid_make(2, 2, 1.0f, 1.0f);
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.shear_resistance = 0.0f;
+	cloth.bend_resistance = 0.0f;
+	plait_create_cloth(world, &cloth, NULL);
+	plait_collider_def ground = plait_default_collider_def();
+	ground.point.y = -1.0f;
+	plait_create_collider(world, &ground, NULL);
+	cr_assert_eq(plait_world_get_substep_count(world), 10);
+	const char *names[16];
+	int count = plait_world_get_schedule(world, 0, names, 16);
+	cr_assert_eq(count, 3);
+	cr_assert_str_eq(names[0], "stretch");
+	cr_assert_str_eq(names[1], "stretch");
+	cr_assert_str_eq(names[2], "collision");
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+}
+
+static size_t live_bytes;
+static void *counting_alloc(size_t size, size_t alignment, void *context)
+{
+	(void)context;
+	size_t *block = aligned_alloc(alignment, (size + 64 + alignment - 1) / alignment * alignment);
+	block[0] = size;
+	live_bytes += size;
+	return (char *)block + 64;
+}
+static void counting_free(void *memory, void *context)
+{
+	(void)context;
+	size_t *block = (size_t *)((char *)memory - 64);
+	live_bytes -= block[0];
+	free(block);
+}
+
+Test(api, allocator_hooks_see_every_byte_and_get_them_back)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.alloc = counting_alloc;
+	wdef.free = counting_free;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	cr_assert_gt(live_bytes, 0);
+	test_grid grid = test_grid_make(8, 8, 1.0f, 1.0f);
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	plait_object_id id = plait_create_cloth(world, &cloth, NULL);
+	plait_collider_def ground = plait_default_collider_def();
+	ground.point.y = -1.0f;
+	plait_create_collider(world, &ground, NULL);
+	cr_assert(test_step_frames(world, 5));
+	plait_destroy_object(id);
+	cr_assert(test_step_frames(world, 1));
+	plait_destroy_world(world);
+	cr_assert_eq(live_bytes, 0, "%zu bytes not returned", live_bytes);
+	test_grid_free(&grid);
+}
