@@ -18,7 +18,7 @@ static float box_distance(const plait_shape *shape, vec3 p, vec3 *normal)
 	float distance;
 	vec3 local_normal;
 	if (d.x > 0.0f || d.y > 0.0f || d.z > 0.0f) {
-		vec3 outside = {fmaxf(d.x, 0.0f) * sign.x, fmaxf(d.y, 0.0f) * sign.y, fmaxf(d.z, 0.0f) * sign.z};
+		vec3 outside = {plait_maxf(d.x, 0.0f) * sign.x, plait_maxf(d.y, 0.0f) * sign.y, plait_maxf(d.z, 0.0f) * sign.z};
 		distance = v3_length(outside);
 		local_normal = v3_scale(outside, 1.0f / distance);
 	} else {
@@ -58,7 +58,7 @@ float plait_shape_distance(const plait_shape *shape, vec3 p, vec3 *normal)
 		vec3 ab = v3_sub(shape->b, shape->a);
 		float length_sq = v3_length_sq(ab);
 		float t = length_sq > 0.0f ? v3_dot(v3_sub(p, shape->a), ab) / length_sq : 0.0f;
-		t = fminf(fmaxf(t, 0.0f), 1.0f);
+		t = plait_minf(plait_maxf(t, 0.0f), 1.0f);
 		vec3 closest = v3_mul_add(shape->a, t, ab);
 		/* On the axis itself any direction perpendicular to it is outward. */
 		vec3 fallback = v3_normalize(v3_cross(ab, fabsf(ab.x) < 0.9f * sqrtf(length_sq) ? v3(1, 0, 0) : v3(0, 1, 0)));
@@ -120,7 +120,7 @@ bool plait_shape_sweep(const plait_shape *shape, vec3 p0, vec3 p1, float radius,
 	vec3 motion = v3_sub(p1, p0);
 	float travel = v3_length(motion);
 	/* Stop advancing within a small fraction of the radius (or of the path for radius 0). */
-	float tolerance = fmaxf(1e-3f * radius, 1e-6f * (travel + 1.0f));
+	float tolerance = plait_maxf(1e-3f * radius, 1e-6f * (travel + 1.0f));
 	float t = 0.0f;
 	if (shape->type == PLAIT_SHAPE_PLANE) {
 		/* Exact for a plane: distance is linear in t. */

@@ -17,6 +17,10 @@ typedef struct mat3 {
 
 #define PLAIT_PI 3.14159265358979323846f
 
+/* Plain comparisons: fmaxf/fminf must honour NaN rules and become library calls in hot loops. */
+static inline float plait_maxf(float a, float b) { return a > b ? a : b; }
+static inline float plait_minf(float a, float b) { return a < b ? a : b; }
+
 static inline vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
 static inline vec3 v3_add(vec3 a, vec3 b) { return (vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
 static inline vec3 v3_sub(vec3 a, vec3 b) { return (vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
@@ -32,8 +36,8 @@ static inline float v3_length_sq(vec3 a) { return v3_dot(a, a); }
 static inline float v3_length(vec3 a) { return sqrtf(v3_dot(a, a)); }
 static inline vec3 v3_lerp(vec3 a, vec3 b, float t) { return v3_mul_add(a, t, v3_sub(b, a)); }
 static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
-static inline vec3 v3_min(vec3 a, vec3 b) { return (vec3){fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z)}; }
-static inline vec3 v3_max(vec3 a, vec3 b) { return (vec3){fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z)}; }
+static inline vec3 v3_min(vec3 a, vec3 b) { return (vec3){plait_minf(a.x, b.x), plait_minf(a.y, b.y), plait_minf(a.z, b.z)}; }
+static inline vec3 v3_max(vec3 a, vec3 b) { return (vec3){plait_maxf(a.x, b.x), plait_maxf(a.y, b.y), plait_maxf(a.z, b.z)}; }
 
 /* Unit vector, or the zero vector when a is too short to have a direction. */
 static inline vec3 v3_normalize(vec3 a)

@@ -10,13 +10,13 @@ static inline void project_distance(plait_distance_block *block, vec3 *x, const 
 		return;
 	}
 	vec3 d = v3_sub(x[j], x[i]);
-	float length = fmaxf(v3_length(d), 1e-12f);
+	float length = plait_maxf(v3_length(d), 1e-12f);
 	float C = length - block->rest[c];
 	/* Branch-free choice of direction: the sign of C is unpredictable, and a negative
 	 * compliance means "no resistance this way". */
 	float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
 	float active = alpha >= 0.0f ? 1.0f : 0.0f;
-	float alpha_tilde = fmaxf(alpha, 0.0f) * inverse_h_squared;
+	float alpha_tilde = plait_maxf(alpha, 0.0f) * inverse_h_squared;
 	float denominator = (w_sum + alpha_tilde) * length;
 	float dlambda_over_length = active * (-C - alpha_tilde * block->lambda[c]) / denominator;
 	block->lambda[c] += dlambda_over_length * length;
@@ -25,21 +25,21 @@ static inline void project_distance(plait_distance_block *block, vec3 *x, const 
 	x[j] = v3_mul_add(x[j], w[j], n);
 }
 
-/* A symmetric Gauss-Seidel sweep: forward through the block, then backward. A forward sweep
- * alone is not symmetric; its error operator can have complex or negative eigenvalues, and
- * turning position corrections into velocities then amplifies them: a cloth solved with one
- * forward sweep per substep can explode. The symmetric sweep's error operator has real
- * eigenvalues in [0, 1), which keeps the position-to-velocity update stable. */
-void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared)
+void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
+                          plait_sweep sweep)
 {
 	vec3 *x = particles->x;
 	const float *w = particles->w;
 	int count = block->count;
-	for (int c = 0; c < count; ++c) {
-		project_distance(block, x, w, c, inverse_h_squared);
+	if (sweep != PLAIT_SWEEP_BACKWARD) {
+		for (int c = 0; c < count; ++c) {
+			project_distance(block, x, w, c, inverse_h_squared);
+		}
 	}
-	for (int c = count - 1; c >= 0; --c) {
-		project_distance(block, x, w, c, inverse_h_squared);
+	if (sweep != PLAIT_SWEEP_FORWARD) {
+		for (int c = count - 1; c >= 0; --c) {
+			project_distance(block, x, w, c, inverse_h_squared);
+		}
 	}
 }
 

@@ -10,7 +10,29 @@
 
 #include "dynamics/sim.h"
 
-void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared);
+/* Direction of a Gauss-Seidel sweep. A forward sweep alone is not symmetric: its error
+ * operator can have complex or negative eigenvalues, and turning position corrections into
+ * velocities then amplifies them (a cloth solved with one forward sweep per substep can
+ * explode). The solver therefore alternates forward and backward sweeps within a substep and
+ * closes an odd count with a symmetric one, so every substep applies whole symmetric sweeps,
+ * whose error operator has real eigenvalues in [0, 1). */
+typedef enum plait_sweep {
+	PLAIT_SWEEP_FORWARD,
+	PLAIT_SWEEP_BACKWARD,
+	PLAIT_SWEEP_SYMMETRIC, /* forward then backward */
+} plait_sweep;
+
+/* The sweep for iteration `iteration` of `count` of a kind in one substep. */
+static inline plait_sweep plait_sweep_for(int iteration, int count)
+{
+	if ((iteration & 1) != 0) {
+		return PLAIT_SWEEP_BACKWARD;
+	}
+	return iteration == count - 1 ? PLAIT_SWEEP_SYMMETRIC : PLAIT_SWEEP_FORWARD;
+}
+
+void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
+                          plait_sweep sweep);
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared);
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);
 

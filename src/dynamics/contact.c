@@ -264,8 +264,8 @@ static int collide_particle_pairs(plait_sim *sim)
 			continue;
 		}
 		sim->pair_list[count++] = i;
-		max_radius = fmaxf(max_radius, p->radius[i]);
-		max_motion = fmaxf(max_motion, v3_length(v3_sub(p->x[i], p->x_prev[i])));
+		max_radius = plait_maxf(max_radius, p->radius[i]);
+		max_motion = plait_maxf(max_motion, v3_length(v3_sub(p->x[i], p->x_prev[i])));
 	}
 	if (count < 2) {
 		return 0;

@@ -84,16 +84,17 @@ static void update_velocities(plait_sim *sim, float h)
 	}
 }
 
-static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared)
+static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, plait_sweep sweep)
 {
+	int sweeps = sweep == PLAIT_SWEEP_SYMMETRIC ? 2 : 1;
 	switch (kind) {
 	case PLAIT_KIND_STRETCH:
-		plait_solve_distance(&sim->stretch, &sim->particles, inverse_h_squared);
-		sim->constraint_solves += sim->stretch.count;
+		plait_solve_distance(&sim->stretch, &sim->particles, inverse_h_squared, sweep);
+		sim->constraint_solves += sweeps * sim->stretch.count;
 		break;
 	case PLAIT_KIND_SHEAR:
-		plait_solve_distance(&sim->shear, &sim->particles, inverse_h_squared);
-		sim->constraint_solves += sim->shear.count;
+		plait_solve_distance(&sim->shear, &sim->particles, inverse_h_squared, sweep);
+		sim->constraint_solves += sweeps * sim->shear.count;
 		break;
 	case PLAIT_KIND_BEND:
 		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared);
@@ -154,9 +155,17 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory in the collision stage");
 		}
 
+		/* The interleaved events of this substep (paper §6), collisions last. */
 		const plait_schedule *schedule = &sim->schedule;
-		for (int e = schedule->substep_start[s]; e < schedule->substep_start[s + 1]; ++e) {
-			run_event(sim, (plait_kind)sim->schedule_kinds[schedule->events[e]], inverse_h_squared);
+		int first = schedule->substep_start[s], last = schedule->substep_start[s + 1];
+		int in_substep[PLAIT_KIND_COUNT] = {0}, done[PLAIT_KIND_COUNT] = {0};
+		for (int e = first; e < last; ++e) {
+			in_substep[schedule->events[e]] += 1;
+		}
+		for (int e = first; e < last; ++e) {
+			int k = schedule->events[e];
+			plait_sweep sweep = plait_sweep_for(done[k]++, in_substep[k]);
+			run_event(sim, (plait_kind)sim->schedule_kinds[k], inverse_h_squared, sweep);
 		}
 
 		update_velocities(sim, h);

@@ -402,7 +402,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	int override = def->iterations;
 	object->importance[PLAIT_KIND_STRETCH] =
 	    override > 0 ? override
-	                 : resistance_importance(fmaxf(def->stretch_resistance, def->compression_resistance));
+	                 : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
 	object->importance[PLAIT_KIND_SHEAR] = override > 0 ? override : resistance_importance(def->shear_resistance);
 	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	plait_world_update_kinds(world);
@@ -462,7 +462,7 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	float scale = world->def.space_scale;
 	int material = add_material(sim, id.index1 - 1, PLAIT_OBJECT_CURVE, &def->surface, def->damp);
 	plait_material *mat = &sim->materials[material];
-	float radius_m = fmaxf(def->surface.thickness * scale, 1e-3f);
+	float radius_m = plait_maxf(def->surface.thickness * scale, 1e-3f);
 	mat->point_drag = def->drag;
 	mat->point_area = PLAIT_PI * radius_m * radius_m;
 	object->material = material;
@@ -505,7 +505,7 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	int override = def->iterations;
 	object->importance[PLAIT_KIND_STRETCH] =
 	    override > 0 ? override
-	                 : resistance_importance(fmaxf(def->stretch_resistance, def->compression_resistance));
+	                 : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
 	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	plait_world_update_kinds(world);
 	return id;
