@@ -3,24 +3,32 @@
  * A 2 m x 2 m cloth of N x N vertices, flat in the XZ plane at y = 0 (x, z in [-1, 1]); the two
  * vertices at z = -1, x = +-1 pinned; 1 kg per free vertex; gravity (0, -9.81, 0); a static
  * sphere of radius 0.5 at (0, -0.75, 0); 60 frames per second; 300 frames. Structural, shear
- * (both quad diagonals) and bend constraints, stretch and shear rigid (resistance 10000) at 20
- * iterations per frame, the default substeps (3) and collision iterations (4).
+ * (both quad diagonals) and bend constraints, the default substeps (3) and collision
+ * iterations (4). Two materials:
+ *   default  the default cloth resistances (stretch 20, compression 10, shear 10, bend 0.1),
+ *            whose iteration counts follow from them (20 stretch, 10 shear, 3 bend per frame);
+ *   rigid    stretch, compression and shear at 10000 (zero compliance), --iterations (20)
+ *            stretch and shear iterations per frame.
  *
- * Prints one line per run: scene, threads, ms/frame (median of the runs), and the strain
- * |length / rest - 1| of the structural edges at the last frame (max, p99, mean).
+ * Prints one line per run: scene, material, threads, ms/frame (median of the runs), the strain
+ * |length / rest - 1| of the structural edges at the last frame (max, p99, mean), and bytes of
+ * library memory per vertex.
  *
- * usage: bench_hang [N ...] [--runs R] [--frames F] [--iterations I] [--substeps S]
+ * usage: bench_hang [N ...] [--material default|rigid|both] [--runs R] [--frames F]
+ *                   [--iterations I] [--substeps S]
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdbool.h>
 #include <time.h>
 
 #include <plait/plait.h>
 
 typedef struct hang_options {
 	int frames, runs, iterations, substeps;
+	bool rigid;
 } hang_options;
 
 static double now_seconds(void)
@@ -111,10 +119,12 @@ static hang_result run_hang(int n, const hang_options *options)
 	cloth.name = "hang";
 	cloth.mesh = (plait_mesh_def){positions, vertex_count, face_sizes, faces, face_indices};
 	cloth.vertex_masses = masses;
-	cloth.stretch_resistance = 10000.0f;
-	cloth.compression_resistance = 10000.0f;
-	cloth.shear_resistance = 10000.0f;
-	cloth.iterations = options->iterations;
+	if (options->rigid) {
+		cloth.stretch_resistance = 10000.0f;
+		cloth.compression_resistance = 10000.0f;
+		cloth.shear_resistance = 10000.0f;
+		cloth.iterations = options->iterations;
+	}
 	cloth.surface.thickness = 0.0f;
 	cloth.pins = pins;
 	cloth.pin_count = 2;
@@ -182,7 +192,8 @@ static hang_result run_hang(int n, const hang_options *options)
 
 int main(int argc, char **argv)
 {
-	hang_options options = {300, 3, 20, 0};
+	hang_options options = {300, 3, 20, 0, false};
+	int materials = 1; /* bit 0: default, bit 1: rigid */
 	int sizes[16], size_count = 0;
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--runs") == 0 && a + 1 < argc) {
@@ -191,12 +202,16 @@ int main(int argc, char **argv)
 			options.frames = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--iterations") == 0 && a + 1 < argc) {
 			options.iterations = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--material") == 0 && a + 1 < argc) {
+			++a;
+			materials = strcmp(argv[a], "rigid") == 0 ? 2 : strcmp(argv[a], "both") == 0 ? 3 : 1;
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
 			options.substeps = atoi(argv[++a]);
 		} else if (size_count < 16 && atoi(argv[a]) > 1) {
 			sizes[size_count++] = atoi(argv[a]);
 		} else {
-			fprintf(stderr, "usage: bench_hang [N ...] [--runs R] [--frames F] [--iterations I] [--substeps S]\n");
+			fprintf(stderr, "usage: bench_hang [N ...] [--material default|rigid|both] [--runs R] [--frames F] "
+			                "[--iterations I] [--substeps S]\n");
 			return 2;
 		}
 	}
@@ -208,20 +223,26 @@ int main(int argc, char **argv)
 		fprintf(stderr, "bench_hang: runs and frames must be >= 1\n");
 		return 2;
 	}
-	for (int s = 0; s < size_count; ++s) {
-		double times[64];
-		hang_result last = {0};
-		int runs = options.runs > 64 ? 64 : options.runs;
-		for (int r = 0; r < runs; ++r) {
-			last = run_hang(sizes[s], &options);
-			times[r] = last.ms_per_frame;
+	for (int m = 0; m < 2; ++m) {
+		if (!(materials & (1 << m))) {
+			continue;
 		}
-		qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
-		printf("scene=hang-%d threads=1 iterations=%d frames=%d ms_per_frame=%.3f strain_max=%.4f strain_p99=%.4f "
-		       "strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
-		       sizes[s], options.iterations, options.frames, times[runs / 2], last.strain_max, last.strain_p99,
-		       last.strain_mean, last.bytes_per_vertex, last.nonfinite);
-		fflush(stdout);
+		options.rigid = m == 1;
+		for (int s = 0; s < size_count; ++s) {
+			double times[64];
+			hang_result last = {0};
+			int runs = options.runs > 64 ? 64 : options.runs;
+			for (int r = 0; r < runs; ++r) {
+				last = run_hang(sizes[s], &options);
+				times[r] = last.ms_per_frame;
+			}
+			qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
+			printf("scene=hang-%d material=%s threads=1 frames=%d ms_per_frame=%.3f strain_max=%.4f "
+			       "strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
+			       sizes[s], options.rigid ? "rigid" : "default", options.frames, times[runs / 2], last.strain_max,
+			       last.strain_p99, last.strain_mean, last.bytes_per_vertex, last.nonfinite);
+			fflush(stdout);
+		}
 	}
 	return 0;
 }

@@ -45,7 +45,7 @@ static double hanging_strain(int n, int substeps)
 	def.stretch_resistance = 0.2f;
 	def.compression_resistance = 0.2f;
 	def.shear_resistance = 0.2f;
-	def.iterations = 300;
+	def.iterations = 600;
 	def.damp = 1.0f;
 	def.pins = pins;
 	def.pin_count = n + 1;
