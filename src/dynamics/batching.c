@@ -5,20 +5,21 @@
 #define MAX_ARITY 4
 #define MAX_WIDTH 16
 
-bool plait_batch_order(const plait_allocator *allocator, const int *vertices, int arity, int count, int width,
-                       int window, int *order)
+int plait_batch_order(const plait_allocator *allocator, const int *vertices, int arity, int count, int width,
+                      int window, int *order, int *batch_sizes)
 {
 	for (int k = 0; k < count; ++k) {
 		order[k] = k;
+		batch_sizes[k] = 1;
 	}
 	if (count <= 1 || arity > MAX_ARITY || width > MAX_WIDTH || width < 2) {
-		return true;
+		return count;
 	}
 	bool *used = plait_alloc_zero(allocator, (size_t)count, sizeof(bool));
 	if (used == NULL) {
-		return false;
+		return -1;
 	}
-	int written = 0, oldest = 0;
+	int written = 0, oldest = 0, batches = 0;
 	while (written < count) {
 		while (used[oldest]) {
 			++oldest;
@@ -50,7 +51,8 @@ bool plait_batch_order(const plait_allocator *allocator, const int *vertices, in
 			order[written++] = c;
 			++batch_size;
 		}
+		batch_sizes[batches++] = batch_size;
 	}
 	plait_free(allocator, used);
-	return true;
+	return batches;
 }

@@ -10,9 +10,10 @@
 #include "core/alloc.h"
 
 /* vertices holds count tuples of `arity` particle indices. Writes order[k] = the constraint to
- * put at position k. Scans at most `window` pending constraints ahead of the oldest one.
- * False when out of memory (order is then the identity). */
-bool plait_batch_order(const plait_allocator *allocator, const int *vertices, int arity, int count, int width,
-                       int window, int *order);
+ * put at position k, and batch_sizes[b] = the size of batch b (constraints of one batch share
+ * no particle). Scans at most `window` pending constraints ahead of the oldest one. Returns the
+ * number of batches, or -1 when out of memory. */
+int plait_batch_order(const plait_allocator *allocator, const int *vertices, int arity, int count, int width,
+                      int window, int *order, int *batch_sizes);
 
 #endif

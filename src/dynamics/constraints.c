@@ -10,7 +10,8 @@ static inline void project_distance(plait_distance_block *block, vec3 *x, const 
 		return;
 	}
 	vec3 d = v3_sub(x[j], x[i]);
-	float length = plait_maxf(v3_length(d), 1e-12f);
+	float length = sqrtf(d.x * d.x + d.y * d.y + d.z * d.z);
+	length = length > 1e-12f ? length : 1e-12f;
 	float C = length - block->rest[c];
 	/* Branch-free choice of direction: the sign of C is unpredictable, and a negative
 	 * compliance means "no resistance this way". */
@@ -25,20 +26,92 @@ static inline void project_distance(plait_distance_block *block, vec3 *x, const 
 	x[j] = v3_mul_add(x[j], w[j], n);
 }
 
+#define LANES 8
+
+/* Projects one batch of at most LANES constraints that share no particle. The arithmetic runs
+ * over fixed-size lane arrays, which the compiler turns into SIMD; since the constraints are
+ * independent, the result is exactly that of projecting them one after another. Unused lanes
+ * carry zero inverse masses and change nothing. */
+static void project_distance_batch(plait_distance_block *block, vec3 *x, const float *w, int first, int n,
+                                   float inverse_h_squared)
+{
+	float dx[LANES], dy[LANES], dz[LANES], wi[LANES], wj[LANES], rest[LANES], tension[LANES], compression[LANES],
+	    lambda[LANES], scale[LANES];
+	for (int lane = 0; lane < LANES; ++lane) {
+		if (lane < n) {
+			int c = first + lane;
+			int i = block->pair[c][0], j = block->pair[c][1];
+			dx[lane] = x[j].x - x[i].x;
+			dy[lane] = x[j].y - x[i].y;
+			dz[lane] = x[j].z - x[i].z;
+			wi[lane] = w[i];
+			wj[lane] = w[j];
+			rest[lane] = block->rest[c];
+			tension[lane] = block->compliance_tension[c];
+			compression[lane] = block->compliance_compression[c];
+			lambda[lane] = block->lambda[c];
+		} else {
+			dx[lane] = 1.0f;
+			dy[lane] = dz[lane] = 0.0f;
+			wi[lane] = wj[lane] = 0.0f;
+			rest[lane] = 1.0f;
+			tension[lane] = compression[lane] = lambda[lane] = 0.0f;
+		}
+	}
+	for (int lane = 0; lane < LANES; ++lane) {
+		float w_sum = wi[lane] + wj[lane];
+		float length = sqrtf(dx[lane] * dx[lane] + dy[lane] * dy[lane] + dz[lane] * dz[lane]);
+		length = length > 1e-12f ? length : 1e-12f;
+		float C = length - rest[lane];
+		/* Branch-free: the sign of C is unpredictable, and a negative compliance means "no
+		 * resistance this way". */
+		float alpha = C > 0.0f ? tension[lane] : compression[lane];
+		float active = (float)((alpha >= 0.0f) & (w_sum > 0.0f));
+		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
+		float denominator = (w_sum + alpha_tilde) * length;
+		denominator = w_sum > 0.0f ? denominator : 1.0f;
+		float s = active * (-C - alpha_tilde * lambda[lane]) / denominator;
+		lambda[lane] += s * length;
+		scale[lane] = s;
+	}
+	for (int lane = 0; lane < n; ++lane) {
+		int c = first + lane;
+		int i = block->pair[c][0], j = block->pair[c][1];
+		block->lambda[c] = lambda[lane];
+		float si = wi[lane] * scale[lane], sj = wj[lane] * scale[lane];
+		x[i].x -= si * dx[lane];
+		x[i].y -= si * dy[lane];
+		x[i].z -= si * dz[lane];
+		x[j].x += sj * dx[lane];
+		x[j].y += sj * dy[lane];
+		x[j].z += sj * dz[lane];
+	}
+}
+
 void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
                           plait_sweep sweep)
 {
 	vec3 *x = particles->x;
 	const float *w = particles->w;
 	int count = block->count;
+	int batches = block->batch_count;
+	int batched = batches > 0 ? block->batch_start[batches] : 0;
 	if (sweep != PLAIT_SWEEP_BACKWARD) {
-		for (int c = 0; c < count; ++c) {
+		for (int b = 0; b < batches; ++b) {
+			int first = block->batch_start[b];
+			project_distance_batch(block, x, w, first, block->batch_start[b + 1] - first, inverse_h_squared);
+		}
+		for (int c = batched; c < count; ++c) {
 			project_distance(block, x, w, c, inverse_h_squared);
 		}
 	}
 	if (sweep != PLAIT_SWEEP_FORWARD) {
-		for (int c = count - 1; c >= 0; --c) {
+		for (int c = count - 1; c >= batched; --c) {
 			project_distance(block, x, w, c, inverse_h_squared);
+		}
+		for (int b = batches - 1; b >= 0; --b) {
+			int first = block->batch_start[b];
+			project_distance_batch(block, x, w, first, block->batch_start[b + 1] - first, inverse_h_squared);
 		}
 	}
 }
@@ -62,7 +135,7 @@ bool plait_dihedral_angle(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float *angle, vec3
 	float e_length = sqrtf(e_length_sq);
 	float sine = v3_dot(v3_cross(nA, nB), e) / e_length;
 	float cosine = v3_dot(nA, nB);
-	*angle = atan2f(sine, cosine);
+	*angle = plait_atan2f(sine, cosine);
 	if (gradient != NULL) {
 		vec3 g2 = v3_scale(nA, -e_length / nA_sq);
 		vec3 g3 = v3_scale(nB, -e_length / nB_sq);

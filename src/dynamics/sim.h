@@ -66,6 +66,10 @@ typedef struct plait_distance_block {
 	float *compliance_tension;
 	float *compliance_compression;
 	float *lambda;
+	/* Batches of constraints that share no particle cover [0, batch_start[batch_count]); any
+	 * constraints after that are projected one by one. */
+	int batch_count, batch_capacity;
+	int *batch_start;
 } plait_distance_block;
 
 /* Signed dihedral angle across an edge (p0, p1) between wings p2 and p3 (cloth bend). */

@@ -56,6 +56,7 @@ static void free_distance(plait_sim *sim, plait_distance_block *b)
 	FREE_FIELD(*b, compliance_tension);
 	FREE_FIELD(*b, compliance_compression);
 	FREE_FIELD(*b, lambda);
+	FREE_FIELD(*b, batch_start);
 }
 
 void plait_sim_destroy(plait_sim *sim)
@@ -303,6 +304,12 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 	p->count = kept;
 	compact_distance(&sim->stretch, remap);
 	compact_distance(&sim->shear, remap);
+	/* Removing constraints breaks batches: batch the blocks again from the start. Should that
+	 * run out of memory, the constraints are still projected, one by one. */
+	sim->stretch.batch_count = 0;
+	sim->shear.batch_count = 0;
+	plait_sim_batch_distance(sim, &sim->stretch, 0);
+	plait_sim_batch_distance(sim, &sim->shear, 0);
 
 	plait_bend_block *bend = &sim->bend;
 	int bend_kept = 0;
@@ -375,21 +382,42 @@ static bool permute(const plait_allocator *allocator, void *data, size_t size, i
 
 bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first)
 {
+	int batched = b->batch_count > 0 ? b->batch_start[b->batch_count] : 0;
+	if (batched != first) {
+		return false; /* batches must stay contiguous from 0 */
+	}
 	int count = b->count - first;
-	if (count <= 1) {
+	if (count <= 0) {
 		return true;
 	}
 	const plait_allocator *a = &sim->allocator;
-	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
-	if (order == NULL) {
-		return false;
+	int needed = b->batch_count + count + 1;
+	if (needed > b->batch_capacity) {
+		int capacity = needed + needed / 2;
+		if (!grow_array(a, (void **)&b->batch_start, sizeof(int), b->batch_count + 1, capacity)) {
+			return false;
+		}
+		b->batch_capacity = capacity;
 	}
-	bool ok = plait_batch_order(a, &b->pair[first][0], 2, count, BATCH_WIDTH, BATCH_WINDOW, order) &&
-	          permute(a, b->pair, sizeof *b->pair, first, count, order) &&
+	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
+	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
+	int batches = order != NULL && sizes != NULL
+	                  ? plait_batch_order(a, &b->pair[first][0], 2, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
+	                  : -1;
+	bool ok = batches >= 0 && permute(a, b->pair, sizeof *b->pair, first, count, order) &&
 	          permute(a, b->rest, sizeof(float), first, count, order) &&
 	          permute(a, b->compliance_tension, sizeof(float), first, count, order) &&
 	          permute(a, b->compliance_compression, sizeof(float), first, count, order);
+	if (ok) {
+		int start = first;
+		b->batch_start[b->batch_count] = start;
+		for (int k = 0; k < batches; ++k) {
+			start += sizes[k];
+			b->batch_start[++b->batch_count] = start;
+		}
+	}
 	plait_free(a, order);
+	plait_free(a, sizes);
 	return ok;
 }
 
@@ -402,13 +430,13 @@ bool plait_sim_batch_bend(plait_sim *sim, int first)
 	}
 	const plait_allocator *a = &sim->allocator;
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
-	if (order == NULL) {
-		return false;
-	}
-	bool ok = plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order) &&
+	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
+	bool ok = order != NULL && sizes != NULL &&
+	          plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes) >= 0 &&
 	          permute(a, b->quad, sizeof *b->quad, first, count, order) &&
 	          permute(a, b->rest_angle, sizeof(float), first, count, order) &&
 	          permute(a, b->compliance, sizeof(float), first, count, order);
 	plait_free(a, order);
+	plait_free(a, sizes);
 	return ok;
 }

@@ -476,6 +476,7 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	int first = object->first_particle;
 	apply_pins(sim, first, def->pins, def->pin_count);
 
+	int first_stretch = sim->stretch.count;
 	const plait_vec3 *x = def->positions;
 	if (def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f) {
 		/* alpha = L / EA with EA = R * 100 N, converted to scene units by 1 / space_scale. */
@@ -488,6 +489,7 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 			                       scale_compliance(tension_alpha, rest), scale_compliance(compression_alpha, rest));
 		}
 	}
+	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
 	if (def->bend_resistance > 0.0f) {
 		float bending = def->bend_resistance * BEND_STIFFNESS_PER_RESISTANCE / (scale * scale * scale);
 		for (int i = 1; i + 1 < n; ++i) {
