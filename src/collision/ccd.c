@@ -479,44 +479,21 @@ static bool ccd_box_inside_domain(const ccd_problem *p, const ccd_box *box)
 	return !p->triangle_domain || box->hi[CCD_U] + box->hi[CCD_V] <= 1.0 - DBL_EPSILON;
 }
 
-/* A starting point for Newton's method: the middle time of the box and, at that time, the (u, v)
- * that solve F = 0 within the plane of G and H (Cramer's rule with n = G x H). False when that point
- * is far outside the region, so a root there belongs to another box. */
-static bool ccd_initial_guess(const ccd_problem *p, const ccd_box *region, double t, double x[3])
-{
-	double e[3], g[3], h[3], n[3], eh[3], eg[3];
-	for (int k = 0; k < 3; k++) {
-		e[k] = ccd_lerp(p->e[0][k], p->e[1][k], t);
-		g[k] = ccd_lerp(p->g[0][k], p->g[1][k], t);
-		h[k] = ccd_lerp(p->h[0][k], p->h[1][k], t);
-	}
-	ccd_cross(g, h, n);
-	ccd_cross(e, h, eh);
-	ccd_cross(e, g, eg);
-	double area = ccd_dot(n, n);
-	if (!(area > 0.0))
-		return false;
-	x[CCD_T] = t;
-	x[CCD_U] = -ccd_dot(eh, n) / area;
-	x[CCD_V] = ccd_dot(eg, n) / area;
-	return x[CCD_U] >= region->lo[CCD_U] && x[CCD_U] <= region->hi[CCD_U] && x[CCD_V] >= region->lo[CCD_V] &&
-	       x[CCD_V] <= region->hi[CCD_V];
-}
-
 /* Looks for a zero of F near the box by Newton's method and certifies it with a small Miranda box
  * around the estimate. On success *contact_time is a time at or after that contact. */
 static bool ccd_certify_root(const ccd_problem *p, const ccd_box *box, double *contact_time)
 {
+	/* Newton starts in the middle and may roam a box width beyond the box: farther roots belong to
+	 * other boxes. */
 	double x[3], det;
 	ccd_matrix adjugate;
 	ccd_box region;
 	for (int i = 0; i < 3; i++) {
-		double width = box->hi[i] - box->lo[i];
-		region.lo[i] = box->lo[i] - 0.5 * width;
-		region.hi[i] = box->hi[i] + 0.5 * width;
+		double middle = 0.5 * (box->lo[i] + box->hi[i]), width = box->hi[i] - box->lo[i];
+		x[i] = middle;
+		region.lo[i] = middle - width;
+		region.hi[i] = middle + width;
 	}
-	if (!ccd_initial_guess(p, &region, 0.5 * (box->lo[CCD_T] + box->hi[CCD_T]), x))
-		return false;
 	double radius[3] = {0.0625 * p->tolerance, CCD_CERTIFY_RADIUS, CCD_CERTIFY_RADIUS};
 	if (!ccd_newton(p, &region, 0.125 * ccd_min(radius[CCD_T], CCD_CERTIFY_RADIUS), x, &adjugate, &det))
 		return false;
