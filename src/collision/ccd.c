@@ -13,6 +13,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 
 enum { CCD_T, CCD_U, CCD_V };
 
@@ -69,6 +70,25 @@ typedef struct ccd_matrix {
 	double v[3][3];
 } ccd_matrix;
 
+/* A face of the parameter domain, as a query of its own: a point against a moving segment,
+ * F = e + w h with w in [0, 1] stored as the problem's v (its g is zero). On the face, the main
+ * query's parameter `pinned` is fixed at `at` and `follows` moves with w; pinned = -1 marks the
+ * triangle's slanted side u + v = 1, where w is v. */
+typedef struct ccd_face {
+	ccd_problem problem;
+	int pinned, follows;
+	double at;
+} ccd_face;
+
+/* A flat query: all four points share one coordinate for the whole step (a cloth lying in a plane
+ * y = const), so that component of F vanishes identically, the contact set is a curve, and its
+ * earliest point lies on a face of the domain, at t = 0, or where the primitives are parallel. */
+typedef struct ccd_flat {
+	int zero_component;
+	ccd_face faces[4];
+	int face_count;
+} ccd_flat;
+
 typedef struct ccd_search {
 	ccd_box stack[CCD_STACK_CAPACITY];
 	int count;
@@ -76,6 +96,8 @@ typedef struct ccd_search {
 	double cutoff;
 	bool hit;
 	int budget;
+	/* Faces for certifying a flat query's contacts, NULL otherwise. */
+	const ccd_flat *flat;
 } ccd_search;
 
 /* Plain comparisons: unlike fmin and fmax these inline, and no NaN can reach them (inputs are
@@ -254,6 +276,73 @@ static void ccd_problem_init(ccd_problem *p, const plait_ccd_motion *motion, boo
 	p->triangle_domain = vertex_face;
 	ccd_set_value_bounds(p);
 	ccd_set_cubic(p);
+}
+
+/* The face query of point `point` against the segment from point `from` to point `to`:
+ * F = x_point - (x_from + w (x_to - x_from)), e = x_point - x_from, h = x_from - x_to. */
+static void ccd_face_init(ccd_face *face, const ccd_problem *main, const plait_ccd_motion *motion, int point,
+                          int from, int to)
+{
+	ccd_problem *p = &face->problem;
+	for (int s = 0; s < 2; s++) {
+		const double(*x)[3] = s == 0 ? motion->start : motion->end;
+		ccd_subtract(x[point], x[from], p->e[s]);
+		ccd_subtract(x[from], x[to], p->h[s]);
+		for (int k = 0; k < 3; k++)
+			p->g[s][k] = 0.0;
+	}
+	p->distance = 0.0;
+	p->tolerance = main->tolerance;
+	p->max_time = main->max_time;
+	p->triangle_domain = false;
+	ccd_set_value_bounds(p);
+	/* Only the certificates use a face; its cubic stays unused. */
+	for (int i = 0; i < 4; i++)
+		p->cubic[i] = 0.0;
+	p->cubic_limit = INFINITY;
+}
+
+static void ccd_add_face(ccd_flat *flat, const ccd_problem *main, const plait_ccd_motion *motion, int point,
+                         int from, int to, int pinned, double at, int follows)
+{
+	ccd_face *face = &flat->faces[flat->face_count++];
+	ccd_face_init(face, main, motion, point, from, to);
+	face->pinned = pinned;
+	face->at = at;
+	face->follows = follows;
+}
+
+/* Sets up the faces when exactly one component of F vanishes identically (its differences are
+ * exactly zero, which happens exactly when the inputs agree) and the query tests touching; with a
+ * thickness the close-corner certificate already works. Returns false for other queries. */
+static bool ccd_flat_init(ccd_flat *flat, const ccd_problem *p, const plait_ccd_motion *motion,
+                          bool vertex_face)
+{
+	flat->zero_component = -1;
+	flat->face_count = 0;
+	int zeros = 0;
+	for (int k = 0; k < 3; k++) {
+		bool zero = true;
+		for (int s = 0; s < 2; s++)
+			zero = zero && p->e[s][k] == 0.0 && p->g[s][k] == 0.0 && p->h[s][k] == 0.0;
+		if (zero) {
+			zeros++;
+			flat->zero_component = k;
+		}
+	}
+	if (zeros != 1 || p->distance > 0.0)
+		return false;
+	if (vertex_face) {
+		ccd_add_face(flat, p, motion, 0, 1, 3, CCD_U, 0.0, CCD_V); /* edge a-c */
+		ccd_add_face(flat, p, motion, 0, 1, 2, CCD_V, 0.0, CCD_U); /* edge a-b */
+		ccd_add_face(flat, p, motion, 0, 2, 3, -1, 1.0, CCD_V);    /* edge b-c */
+	} else {
+		ccd_add_face(flat, p, motion, 0, 2, 3, CCD_U, 0.0, CCD_V); /* a0 against edge b */
+		ccd_add_face(flat, p, motion, 1, 2, 3, CCD_U, 1.0, CCD_V); /* a1 against edge b */
+		ccd_add_face(flat, p, motion, 2, 0, 1, CCD_V, 0.0, CCD_U); /* b0 against edge a */
+		ccd_add_face(flat, p, motion, 3, 0, 1, CCD_V, 1.0, CCD_U); /* b1 against edge a */
+	}
+	return true;
 }
 
 /* x + s (y - x) */
@@ -518,6 +607,144 @@ static bool ccd_certify_root(const ccd_problem *p, const ccd_box *box, double *c
 	return true;
 }
 
+/* Newton's method and the Miranda test in the two free dimensions i1, i2 of a box whose third
+ * dimension has zero width, on the two components of F other than the one that vanishes
+ * identically. Same reasoning as ccd_certify_root with 2x2 matrices: the adjugate of
+ * [[a, b], [c, d]] is [[d, -b], [-c, a]]. */
+static bool ccd_certify_root_2d(const ccd_problem *p, const ccd_box *box, int i1, int i2, int zero_component,
+                                double *contact_time)
+{
+	int k1 = (zero_component + 1) % 3, k2 = (zero_component + 2) % 3;
+	double x[3], y[2][2] = {{0.0, 0.0}, {0.0, 0.0}}, det = 0.0;
+	ccd_box region = *box;
+	for (int i = 0; i < 3; i++)
+		x[i] = 0.5 * (box->lo[i] + box->hi[i]);
+	for (int j = 0; j < 2; j++) {
+		int i = j == 0 ? i1 : i2;
+		double width = box->hi[i] - box->lo[i];
+		region.lo[i] -= width;
+		region.hi[i] += width;
+	}
+	double radius[3] = {0.0625 * p->tolerance, CCD_CERTIFY_RADIUS, CCD_CERTIFY_RADIUS};
+	double settled = 0.125 * ccd_min(radius[CCD_T], CCD_CERTIFY_RADIUS);
+	bool converged = false;
+	for (int iteration = 0; iteration < CCD_NEWTON_ITERATIONS && !converged; iteration++) {
+		double f[3];
+		ccd_matrix jacobian;
+		ccd_value_and_jacobian(p, x, f, &jacobian);
+		double a = jacobian.v[i1][k1], b = jacobian.v[i2][k1], c = jacobian.v[i1][k2], d = jacobian.v[i2][k2];
+		det = a * d - b * c;
+		if (!(fabs(det) > 0.0))
+			return false;
+		y[0][0] = d, y[0][1] = -b, y[1][0] = -c, y[1][1] = a;
+		double step1 = (y[0][0] * f[k1] + y[0][1] * f[k2]) / det;
+		double step2 = (y[1][0] * f[k1] + y[1][1] * f[k2]) / det;
+		x[i1] -= step1;
+		x[i2] -= step2;
+		if (!(x[i1] >= region.lo[i1] && x[i1] <= region.hi[i1] && x[i2] >= region.lo[i2] &&
+		      x[i2] <= region.hi[i2]))
+			return false;
+		converged = ccd_max(fabs(step1), fabs(step2)) < settled;
+	}
+	if (!converged)
+		return false;
+
+	ccd_box test = *box;
+	for (int j = 0; j < 2; j++) {
+		int i = j == 0 ? i1 : i2;
+		double spread = fabs(y[j][0]) * p->value_error[k1] + fabs(y[j][1]) * p->value_error[k2];
+		double r = ccd_max(32.0 * spread / fabs(det), ccd_min(radius[i], 0.5 * ccd_room(p, x, i)));
+		test.lo[i] = x[i] - r;
+		test.hi[i] = x[i] + r;
+	}
+	if (!(test.hi[CCD_T] - test.lo[CCD_T] <= 0.5 * p->tolerance) || !ccd_box_inside_domain(p, &test))
+		return false;
+
+	ccd_corners corners;
+	ccd_corner_values(p, &test, &corners);
+	double largest1 = 0.0, largest2 = 0.0;
+	for (int c = 0; c < 8; c++) {
+		largest1 = ccd_max(largest1, fabs(corners.f[c][k1]));
+		largest2 = ccd_max(largest2, fabs(corners.f[c][k2]));
+	}
+	for (int j = 0; j < 2; j++) {
+		int i = j == 0 ? i1 : i2;
+		/* A two-term dot product rounds by less than 4u of its absolute terms. */
+		double error = (fabs(y[j][0]) * (p->value_error[k1] + 4.0 * CCD_ROUNDOFF * largest1) +
+		                fabs(y[j][1]) * (p->value_error[k2] + 4.0 * CCD_ROUNDOFF * largest2)) *
+		                   (1.0 + 8.0 * CCD_ROUNDOFF) +
+		               CCD_UNDERFLOW_SLACK;
+		bool rising = true, falling = true;
+		for (int c = 0; c < 8; c++) {
+			double g = y[j][0] * corners.f[c][k1] + y[j][1] * corners.f[c][k2];
+			bool upper = (c >> i) & 1;
+			rising = rising && (upper ? g > error : g < -error);
+			falling = falling && (upper ? g < -error : g > error);
+		}
+		if (!rising && !falling)
+			return false;
+	}
+	/* Y is invertible when its determinant is certainly nonzero (two products and a difference). */
+	double diagonal = y[0][0] * y[1][1], cross = y[0][1] * y[1][0];
+	if (!(fabs(diagonal - cross) > 4.0 * CCD_ROUNDOFF * (fabs(diagonal) + fabs(cross)) + CCD_UNDERFLOW_SLACK))
+		return false;
+	*contact_time = test.hi[CCD_T];
+	return true;
+}
+
+/* The part of a face inside a box of the main query, as a box of the face's own query. */
+static bool ccd_face_box(const ccd_face *face, const ccd_box *box, ccd_box *out)
+{
+	double lo, hi;
+	if (face->pinned >= 0) {
+		double side = face->at == 0.0 ? box->lo[face->pinned] : box->hi[face->pinned];
+		if (side != face->at)
+			return false;
+		lo = box->lo[face->follows];
+		hi = box->hi[face->follows];
+	} else {
+		/* The slanted side u + v = 1 at (1 - w, w); u, v are dyadic, so these sums and
+		 * differences are exact. */
+		if (!(box->lo[CCD_U] + box->lo[CCD_V] <= 1.0 && box->hi[CCD_U] + box->hi[CCD_V] >= 1.0))
+			return false;
+		lo = ccd_max(box->lo[CCD_V], 1.0 - box->hi[CCD_U]);
+		hi = ccd_min(box->hi[CCD_V], 1.0 - box->lo[CCD_U]);
+	}
+	out->lo[CCD_T] = box->lo[CCD_T];
+	out->hi[CCD_T] = box->hi[CCD_T];
+	out->lo[CCD_U] = out->hi[CCD_U] = 0.0;
+	out->lo[CCD_V] = lo;
+	out->hi[CCD_V] = hi;
+	return lo <= hi;
+}
+
+/* A flat query's contacts in or near the box: overlap at t = 0, or a contact on a face of the
+ * domain. Reports the earliest certified one. */
+static bool ccd_certify_flat(const ccd_problem *p, const ccd_flat *flat, const ccd_box *box,
+                             double *contact_time)
+{
+	bool found = false;
+	double time;
+	if (box->lo[CCD_T] == 0.0) {
+		ccd_box start = *box;
+		start.hi[CCD_T] = 0.0;
+		if (ccd_certify_root_2d(p, &start, CCD_U, CCD_V, flat->zero_component, &time)) {
+			*contact_time = time;
+			return true;
+		}
+	}
+	for (int i = 0; i < flat->face_count; i++) {
+		ccd_box face_box;
+		if (!ccd_face_box(&flat->faces[i], box, &face_box) ||
+		    !ccd_certify_root_2d(&flat->faces[i].problem, &face_box, CCD_T, CCD_V, flat->zero_component,
+		                         &time))
+			continue;
+		*contact_time = found ? ccd_min(*contact_time, time) : time;
+		found = true;
+	}
+	return found;
+}
+
 /* With d > 0 a corner of the box inside the domain whose distance is certainly below d is a
  * contact; the earliest such corner is reported. */
 static bool ccd_certify_close_corner(const ccd_problem *p, const ccd_box *box, const ccd_corners *corners,
@@ -631,6 +858,7 @@ static void ccd_examine(const ccd_problem *p, ccd_search *search, ccd_box box)
 	 * contact cannot be found over and over. */
 	double contact_time = INFINITY;
 	bool certified = p->distance > 0.0 ? ccd_certify_close_corner(p, &box, &corners, &contact_time)
+	                 : search->flat    ? ccd_certify_flat(p, search->flat, &box, &contact_time)
 	                                   : ccd_certify_root(p, &box, &contact_time);
 	if (certified && contact_time - 0.5 * p->tolerance < search->cutoff) {
 		ccd_record_contact(p, search, contact_time);
@@ -674,6 +902,8 @@ static bool ccd_run(const plait_ccd_motion *motion, bool vertex_face, double min
 	search.cutoff = INFINITY;
 	search.hit = false;
 	search.budget = CCD_BOX_BUDGET;
+	ccd_flat flat;
+	search.flat = ccd_flat_init(&flat, &p, motion, vertex_face) ? &flat : NULL;
 	ccd_box root = {{0.0, 0.0, 0.0}, {p.max_time, 1.0, 1.0}};
 	ccd_push(&search, &root);
 	while (search.count > 0) {
