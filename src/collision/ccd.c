@@ -481,6 +481,13 @@ static double ccd_adjugate(const ccd_matrix *matrix, ccd_matrix *adjugate)
 	return ccd_dot(columns[0], rows[0]);
 }
 
+/* Newton converges quadratically: once a step is below a quarter of the square root of the
+ * certification radius, the error left after it is far below that radius. */
+static double ccd_newton_settled(const double radius[3])
+{
+	return 0.25 * sqrt(ccd_min(radius[CCD_T], ccd_min(radius[CCD_U], radius[CCD_V])));
+}
+
 /* Newton's method for F(x) = 0 from x. Fails if it does not settle or wanders out of the region (a
  * root elsewhere is another box's business). Leaves the adjugate of the last Jacobian in rows. */
 static bool ccd_newton(const ccd_problem *p, const ccd_box *region, double settled, double x[3],
@@ -584,7 +591,7 @@ static bool ccd_certify_root(const ccd_problem *p, const ccd_box *box, double *c
 		region.hi[i] = middle + width;
 	}
 	double radius[3] = {0.0625 * p->tolerance, CCD_CERTIFY_RADIUS, CCD_CERTIFY_RADIUS};
-	if (!ccd_newton(p, &region, 0.125 * ccd_min(radius[CCD_T], CCD_CERTIFY_RADIUS), x, &adjugate, &det))
+	if (!ccd_newton(p, &region, ccd_newton_settled(radius), x, &adjugate, &det))
 		return false;
 
 	/* The root is uncertain by about the rounding error mapped through the inverse Jacobian; the
@@ -626,7 +633,7 @@ static bool ccd_certify_root_2d(const ccd_problem *p, const ccd_box *box, int i1
 		region.hi[i] += width;
 	}
 	double radius[3] = {0.0625 * p->tolerance, CCD_CERTIFY_RADIUS, CCD_CERTIFY_RADIUS};
-	double settled = 0.125 * ccd_min(radius[CCD_T], CCD_CERTIFY_RADIUS);
+	double settled = ccd_newton_settled(radius);
 	bool converged = false;
 	for (int iteration = 0; iteration < CCD_NEWTON_ITERATIONS && !converged; iteration++) {
 		double f[3];

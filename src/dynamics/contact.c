@@ -76,9 +76,14 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 	}
 	if (sim->pair_list_capacity < p->count) {
 		plait_free(&sim->allocator, sim->pair_list);
+		plait_free(&sim->allocator, sim->pair_lower);
+		plait_free(&sim->allocator, sim->pair_upper);
 		sim->pair_list = plait_alloc_zero(&sim->allocator, (size_t)p->count, sizeof(int));
-		sim->pair_list_capacity = sim->pair_list == NULL ? 0 : p->count;
-		if (sim->pair_list == NULL) {
+		sim->pair_lower = plait_alloc_zero(&sim->allocator, (size_t)p->count, sizeof(vec3));
+		sim->pair_upper = plait_alloc_zero(&sim->allocator, (size_t)p->count, sizeof(vec3));
+		bool ok = sim->pair_list != NULL && sim->pair_lower != NULL && sim->pair_upper != NULL;
+		sim->pair_list_capacity = ok ? p->count : 0;
+		if (!ok) {
 			return false;
 		}
 	}
@@ -257,52 +262,75 @@ static int collide_particle_pairs(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
 	plait_particle_hash *hash = sim->hash;
+	/* Whether two particles touch depends only on their relative motion, so the swept boxes
+	 * are taken in a frame moving with the particles' mean displacement: a falling cloud then
+	 * sweeps small boxes instead of long columns that all overlap. */
 	int count = 0;
-	float max_radius = 0.0f, max_motion = 0.0f;
+	double sum_x = 0.0, sum_y = 0.0, sum_z = 0.0;
 	for (int i = 0; i < p->count; ++i) {
-		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE)) {
-			continue;
+		if (p->flags[i] & PLAIT_PARTICLE_COLLIDE) {
+			sum_x += (double)(p->x[i].x - p->x_prev[i].x);
+			sum_y += (double)(p->x[i].y - p->x_prev[i].y);
+			sum_z += (double)(p->x[i].z - p->x_prev[i].z);
+			++count;
 		}
-		sim->pair_list[count++] = i;
-		max_radius = plait_maxf(max_radius, p->radius[i]);
-		max_motion = plait_maxf(max_motion, v3_length(v3_sub(p->x[i], p->x_prev[i])));
 	}
 	if (count < 2) {
 		return 0;
 	}
-	/* Two particles that touch at any time in the substep are, at its end, at most
-	 * 2 max_radius + 2 max_motion apart: with cells that large, neighbours suffice. */
-	float cell = 2.0f * max_radius + 2.0f * max_motion;
-	if (!(cell > 0.0f)) {
+	vec3 drift = {(float)(sum_x / count), (float)(sum_y / count), (float)(sum_z / count)};
+	count = 0;
+	float max_radius = 0.0f;
+	for (int i = 0; i < p->count; ++i) {
+		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE)) {
+			continue;
+		}
+		float r = p->radius[i];
+		vec3 thickness = {r, r, r};
+		vec3 end = v3_sub(p->x[i], drift);
+		sim->pair_list[count] = i;
+		sim->pair_lower[count] = v3_sub(v3_min(p->x_prev[i], end), thickness);
+		sim->pair_upper[count] = v3_add(v3_max(p->x_prev[i], end), thickness);
+		max_radius = plait_maxf(max_radius, r);
+		++count;
+	}
+	if (count < 2 || !(max_radius > 0.0f)) {
 		return 0;
 	}
-	if (!plait_particle_hash_build(hash, &sim->allocator, p->x, sim->pair_list, count, cell)) {
-		return 0;
-	}
-	if (!ensure_pair_contacts(sim)) {
+	/* Cells as wide as the largest particle: a resting particle touches up to 8 of them, a
+	 * moving one the cells its path sweeps. */
+	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper, count,
+	                               2.0f * max_radius) ||
+	    !ensure_pair_contacts(sim)) {
 		return 0;
 	}
 	int contacts = 0;
-	for (int k = 0; k < count; ++k) {
-		int i = sim->pair_list[k];
-		const plait_material *mi = &sim->materials[p->material[i]];
-		plait_hash_cell home = hash->particle_cell[k];
-		for (int dz = -1; dz <= 1; ++dz) {
-			for (int dy = -1; dy <= 1; ++dy) {
-				for (int dx = -1; dx <= 1; ++dx) {
-					plait_hash_cell cell_key = {home.x + dx, home.y + dy, home.z + dz};
-					int bucket = plait_particle_hash_bucket(hash, cell_key);
-					for (int e = hash->bucket_start[bucket]; e < hash->bucket_start[bucket + 1]; ++e) {
-						int j = hash->entry_particle[e];
-						plait_hash_cell c = hash->entry_cell[e];
-						if (j <= i || c.x != cell_key.x || c.y != cell_key.y || c.z != cell_key.z) {
-							continue;
-						}
-						if (!materials_pair_up(mi, &sim->materials[p->material[j]])) {
-							continue;
-						}
-						contacts += collide_pair(sim, i, j);
-					}
+	for (int b = 0; b < hash->table_size; ++b) {
+		int first = hash->bucket_start[b], last = hash->bucket_start[b + 1];
+		for (int e = first; e < last; ++e) {
+			const plait_hash_entry *a = &hash->entries[e];
+			const plait_material *ma = &sim->materials[p->material[a->particle]];
+			for (int f = e + 1; f < last; ++f) {
+				const plait_hash_entry *c = &hash->entries[f];
+				if (c->cell.x != a->cell.x || c->cell.y != a->cell.y || c->cell.z != a->cell.z) {
+					continue;
+				}
+				if (!plait_particle_hash_owns_pair(a, c) ||
+				    !materials_pair_up(ma, &sim->materials[p->material[c->particle]])) {
+					continue;
+				}
+				/* Boxes must overlap before the exact swept test. */
+				const vec3 *la = &sim->pair_lower[a->slot], *ua = &sim->pair_upper[a->slot];
+				const vec3 *lc = &sim->pair_lower[c->slot], *uc = &sim->pair_upper[c->slot];
+				if (la->x > uc->x || lc->x > ua->x || la->y > uc->y || lc->y > ua->y || la->z > uc->z ||
+				    lc->z > ua->z) {
+					continue;
+				}
+				int i = a->particle < c->particle ? a->particle : c->particle;
+				int j = a->particle < c->particle ? c->particle : a->particle;
+				contacts += collide_pair(sim, i, j);
+				if (sim->pair_contact_count == sim->pair_contact_capacity && !ensure_pair_contacts(sim)) {
+					return contacts;
 				}
 			}
 		}
@@ -313,13 +341,15 @@ static int collide_particle_pairs(plait_sim *sim)
 void plait_collide(plait_sim *sim)
 {
 	int contacts = 0;
+	/* Particle pairs first, colliders last: a collider is immovable, so it has the last word
+	 * and a pile pressing on the floor cannot push its bottom layer through it. */
+	if (sim->particle_pairs_active) {
+		contacts += collide_particle_pairs(sim);
+	}
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
 			contacts += collide_with_collider(sim, &sim->colliders[k]);
 		}
-	}
-	if (sim->particle_pairs_active) {
-		contacts += collide_particle_pairs(sim);
 	}
 	sim->contacts += contacts;
 }

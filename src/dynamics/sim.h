@@ -160,6 +160,7 @@ typedef struct plait_sim {
 	plait_particle_contact *pair_contacts;
 	void *hash; /* plait_particle_hash, owned by contact.c */
 	int *pair_list; /* particles taking part in particle-pair collisions */
+	vec3 *pair_lower, *pair_upper; /* their swept, thickened boxes */
 	int pair_list_capacity;
 
 	int frame;
