@@ -1,10 +1,14 @@
-/* Times the CCD queries of shared/ccd set by set and counts misses (FN) and extra hits (FP)
- * against the exact ground truth. One line per set:
- *   set=<name> kind=<vf|ee> queries=N positives=P fn=F fp=X ns_per_query=T
- * where T is the median over three timed runs. Usage: bench_ccd [ccd data dir]. */
+/* Times the CCD queries of shared/ccd set by set and counts misses (fn) and extra hits (fp) against
+ * the exact ground truth. One line per set:
+ *   set=<name> kind=<vf|ee> queries=N positives=P fn=F fp=X ns_per_query=T toi_checked=C
+ *   toi_late=L toi_within_tolerance=W toi_largest_gap=G
+ * T is the median over three timed runs (zero thickness, tolerance 1e-6). The toi fields compare the
+ * reported times of impact with the exact first contacts where the data set gives them (roots/):
+ * L must be 0. A last line gives the time per query over all sets. Usage: bench_ccd [ccd data dir]. */
 #include "collision/ccd.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +20,8 @@ typedef struct bench_query {
 	plait_ccd_motion motion;
 	double max_time;
 	double minimum_distance;
+	/* Exact time of the first contact where the data gives it (roots/), NAN otherwise. */
+	double first_contact;
 	bool truth;
 } bench_query;
 
@@ -53,6 +59,7 @@ static bench_query *bench_add_query(bench_set *set)
 	bench_query *q = &set->queries[set->count++];
 	memset(q, 0, sizeof(*q));
 	q->max_time = 1.0;
+	q->first_contact = NAN;
 	return q;
 }
 
@@ -135,6 +142,22 @@ static void bench_read_truth(const char *path, bench_set *set, int count)
 			set->queries[index++].truth = strcmp(word, "true") == 0;
 			length = 0;
 		}
+	}
+	fclose(file);
+}
+
+/* "query_index,toi,kind" rows: the exact first contact of positives among the last `count` queries. */
+static void bench_read_first_contacts(const char *path, bench_set *set, int count)
+{
+	FILE *file = fopen(path, "r");
+	if (!file)
+		return;
+	char line[256];
+	while (fgets(line, sizeof(line), file)) {
+		char *end;
+		long index = strtol(line, &end, 10);
+		if (end != line && *end == ',' && index >= 0 && index < count)
+			set->queries[set->count - count + index].first_contact = strtod(end + 1, NULL);
 	}
 	fclose(file);
 }
@@ -240,6 +263,8 @@ static void bench_load_scalable(const char *root, bench_sets *all)
 					snprintf(file, sizeof(file), "%s/%s/mma_bool/%s_mma_bool.json", path, scenes[s], stem);
 					bench_read_truth(file, set, read);
 				}
+				snprintf(file, sizeof(file), "%s/%s/roots/%s_toi.csv", path, scenes[s], stem);
+				bench_read_first_contacts(file, set, read);
 			}
 			bench_free_list(files, file_count);
 		}
@@ -315,19 +340,44 @@ static int bench_compare_doubles(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
+/* Times of impact against the exact first contacts: how many were checked, reported late (must be
+ * none), and within the tolerance before the contact; the largest gap. */
+typedef struct bench_toi_stats {
+	int checked, late, within_tolerance;
+	double largest_gap;
+} bench_toi_stats;
+
+static bench_toi_stats bench_check_tois(const bench_set *set, const bool *hits, const double *tois)
+{
+	bench_toi_stats stats = {0};
+	for (int i = 0; i < set->count; i++) {
+		double contact = set->queries[i].first_contact;
+		if (!hits[i] || isnan(contact))
+			continue;
+		double gap = contact - tois[i];
+		stats.checked++;
+		/* The exact times are printed to 20 digits: allow their last-place rounding. */
+		stats.late += gap < -1e-15 * contact;
+		stats.within_tolerance += gap <= PLAIT_CCD_DEFAULT_TOLERANCE * (1.0 + 1e-9);
+		stats.largest_gap = gap > stats.largest_gap ? gap : stats.largest_gap;
+	}
+	return stats;
+}
+
 static void bench_run_set(const bench_set *set, long *total_queries, double *total_seconds)
 {
 	bool *hits = malloc((size_t)set->count * sizeof(bool));
+	double *tois = malloc((size_t)set->count * sizeof(double));
 	double seconds[BENCH_RUNS];
 	for (int run = 0; run < BENCH_RUNS; run++) {
 		double begin = bench_now();
 		for (int i = 0; i < set->count; i++) {
 			const bench_query *q = &set->queries[i];
-			double toi;
-			hits[i] = set->vertex_face ? plait_ccd_vertex_face(&q->motion, q->minimum_distance,
-			                                                   PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &toi)
-			                           : plait_ccd_edge_edge(&q->motion, q->minimum_distance,
-			                                                 PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &toi);
+			hits[i] = set->vertex_face
+			              ? plait_ccd_vertex_face(&q->motion, q->minimum_distance,
+			                                      PLAIT_CCD_DEFAULT_TOLERANCE, q->max_time, &tois[i])
+			              : plait_ccd_edge_edge(&q->motion, q->minimum_distance, PLAIT_CCD_DEFAULT_TOLERANCE,
+			                                    q->max_time, &tois[i]);
 		}
 		seconds[run] = bench_now() - begin;
 	}
@@ -338,13 +388,17 @@ static void bench_run_set(const bench_set *set, long *total_queries, double *tot
 		false_negatives += set->queries[i].truth && !hits[i];
 		false_positives += !set->queries[i].truth && hits[i];
 	}
+	bench_toi_stats toi = bench_check_tois(set, hits, tois);
 	double median = seconds[BENCH_RUNS / 2];
-	printf("set=%s kind=%s queries=%d positives=%d fn=%d fp=%d ns_per_query=%.1f\n", set->name,
-	       set->vertex_face ? "vf" : "ee", set->count, positives, false_negatives, false_positives,
-	       set->count ? 1e9 * median / set->count : 0.0);
+	printf("set=%s kind=%s queries=%d positives=%d fn=%d fp=%d ns_per_query=%.1f toi_checked=%d toi_late=%d "
+	       "toi_within_tolerance=%d toi_largest_gap=%.3g\n",
+	       set->name, set->vertex_face ? "vf" : "ee", set->count, positives, false_negatives, false_positives,
+	       set->count ? 1e9 * median / set->count : 0.0, toi.checked, toi.late, toi.within_tolerance,
+	       toi.largest_gap);
 	*total_queries += set->count;
 	*total_seconds += median;
 	free(hits);
+	free(tois);
 }
 
 int main(int argc, char **argv)
