@@ -185,7 +185,8 @@ typedef struct plait_cloth_def {
 	float tangential_drag;        /* >= 0 (0.01) */
 	float lift;                   /* >= 0 (0.05) */
 	float damp;                   /* velocity damping rate, 1/s, 0..100 (0) */
-	int iterations; /* stretch and shear iterations per frame; 0 = from the resistances (0) */
+	int iterations; /* stretch iterations per frame; 0 = from the stretch and compression
+	                 * resistances (0). Lets a stiff material run with few iterations. */
 	plait_surface_def surface;
 	const int *pins; /* vertex indices held at their start position (targets settable later) */
 	int pin_count;

@@ -403,7 +403,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	object->importance[PLAIT_KIND_STRETCH] =
 	    override > 0 ? override
 	                 : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
-	object->importance[PLAIT_KIND_SHEAR] = override > 0 ? override : resistance_importance(def->shear_resistance);
+	object->importance[PLAIT_KIND_SHEAR] = resistance_importance(def->shear_resistance);
 	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	plait_world_update_kinds(world);
 	return id;
