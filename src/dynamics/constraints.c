@@ -149,42 +149,135 @@ bool plait_dihedral_angle(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float *angle, vec3
 	return true;
 }
 
+/* The bend projection of one batch of at most LANES hinges sharing no particle, in the same
+ * lane-array form as the distance batches (SIMD, results equal to sequential projection). The
+ * math is plait_dihedral_angle's, written branch-free: a degenerate hinge (a zero-area
+ * triangle or zero-length edge) gets a zero correction. */
+static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w, int first, int n,
+                               float inverse_h_squared)
+{
+	float px[4][LANES], py[4][LANES], pz[4][LANES], wq[4][LANES];
+	float rest[LANES], compliance[LANES], lambda[LANES];
+	float gx[4][LANES], gy[4][LANES], gz[4][LANES], step[LANES];
+	for (int lane = 0; lane < LANES; ++lane) {
+		int c = first + (lane < n ? lane : 0);
+		for (int k = 0; k < 4; ++k) {
+			int i = block->quad[c][k];
+			px[k][lane] = x[i].x;
+			py[k][lane] = x[i].y;
+			pz[k][lane] = x[i].z;
+			wq[k][lane] = lane < n ? w[i] : 0.0f;
+		}
+		rest[lane] = block->rest_angle[c];
+		compliance[lane] = block->compliance[c];
+		lambda[lane] = block->lambda[c];
+	}
+	for (int lane = 0; lane < LANES; ++lane) {
+		float ex = px[1][lane] - px[0][lane], ey = py[1][lane] - py[0][lane], ez = pz[1][lane] - pz[0][lane];
+		float ax = px[2][lane] - px[0][lane], ay = py[2][lane] - py[0][lane], az = pz[2][lane] - pz[0][lane];
+		float bx = px[3][lane] - px[1][lane], by = py[3][lane] - py[1][lane], bz = pz[3][lane] - pz[1][lane];
+		/* nA = e x (p2 - p0), nB = (p0 - p1) x (p3 - p1) = -e x (p3 - p1) */
+		float nax = ey * az - ez * ay, nay = ez * ax - ex * az, naz = ex * ay - ey * ax;
+		float nbx = -(ey * bz - ez * by), nby = -(ez * bx - ex * bz), nbz = -(ex * by - ey * bx);
+		float e2 = ex * ex + ey * ey + ez * ez;
+		float na2 = nax * nax + nay * nay + naz * naz, nb2 = nbx * nbx + nby * nby + nbz * nbz;
+		int valid = (e2 > 1e-24f) & (na2 > 1e-30f) & (nb2 > 1e-30f);
+		e2 = valid ? e2 : 1.0f;
+		na2 = valid ? na2 : 1.0f;
+		nb2 = valid ? nb2 : 1.0f;
+		float el = sqrtf(e2);
+		float cx = nay * nbz - naz * nby, cy = naz * nbx - nax * nbz, cz = nax * nby - nay * nbx;
+		float sine = (cx * ex + cy * ey + cz * ez) / el;
+		float cosine = nax * nbx + nay * nby + naz * nbz;
+		float C = plait_atan2f(sine, cosine) - rest[lane];
+		C = C > PLAIT_PI ? C - 2.0f * PLAIT_PI : C;
+		C = C < -PLAIT_PI ? C + 2.0f * PLAIT_PI : C;
+		float fa = -el / na2, fb = -el / nb2;
+		float g2x = nax * fa, g2y = nay * fa, g2z = naz * fa;
+		float g3x = nbx * fb, g3y = nby * fb, g3z = nbz * fb;
+		float a2 = (ax * ex + ay * ey + az * ez) / e2;
+		float dx3 = px[3][lane] - px[0][lane], dy3 = py[3][lane] - py[0][lane], dz3 = pz[3][lane] - pz[0][lane];
+		float a3 = (dx3 * ex + dy3 * ey + dz3 * ez) / e2;
+		gx[0][lane] = g2x * (a2 - 1.0f) + g3x * (a3 - 1.0f);
+		gy[0][lane] = g2y * (a2 - 1.0f) + g3y * (a3 - 1.0f);
+		gz[0][lane] = g2z * (a2 - 1.0f) + g3z * (a3 - 1.0f);
+		gx[1][lane] = g2x * -a2 + g3x * -a3;
+		gy[1][lane] = g2y * -a2 + g3y * -a3;
+		gz[1][lane] = g2z * -a2 + g3z * -a3;
+		gx[2][lane] = g2x;
+		gy[2][lane] = g2y;
+		gz[2][lane] = g2z;
+		gx[3][lane] = g3x;
+		gy[3][lane] = g3y;
+		gz[3][lane] = g3z;
+		float denominator = 0.0f;
+		for (int k = 0; k < 4; ++k) {
+			denominator += wq[k][lane] * (gx[k][lane] * gx[k][lane] + gy[k][lane] * gy[k][lane] + gz[k][lane] * gz[k][lane]);
+		}
+		float alpha_tilde = compliance[lane] * inverse_h_squared;
+		denominator += alpha_tilde;
+		int active = valid & (denominator > 1e-30f);
+		denominator = active ? denominator : 1.0f;
+		float dlambda = (float)active * (-C - alpha_tilde * lambda[lane]) / denominator;
+		lambda[lane] += dlambda;
+		step[lane] = dlambda;
+	}
+	for (int lane = 0; lane < n; ++lane) {
+		int c = first + lane;
+		block->lambda[c] = lambda[lane];
+		for (int k = 0; k < 4; ++k) {
+			int i = block->quad[c][k];
+			float s = wq[k][lane] * step[lane];
+			x[i].x += s * gx[k][lane];
+			x[i].y += s * gy[k][lane];
+			x[i].z += s * gz[k][lane];
+		}
+	}
+}
+
+static void project_bend(plait_bend_block *block, vec3 *x, const float *w, int c, float inverse_h_squared)
+{
+	const int *q = block->quad[c];
+	float wq[4] = {w[q[0]], w[q[1]], w[q[2]], w[q[3]]};
+	if (wq[0] + wq[1] + wq[2] + wq[3] == 0.0f) {
+		return;
+	}
+	float angle;
+	vec3 g[4];
+	if (!plait_dihedral_angle(x[q[0]], x[q[1]], x[q[2]], x[q[3]], &angle, g)) {
+		return;
+	}
+	float C = angle - block->rest_angle[c];
+	/* The shortest way round: a fold through +-pi must not unwind the long way. */
+	C = C > PLAIT_PI ? C - 2.0f * PLAIT_PI : C;
+	C = C < -PLAIT_PI ? C + 2.0f * PLAIT_PI : C;
+	float denominator = 0.0f;
+	for (int k = 0; k < 4; ++k) {
+		denominator += wq[k] * v3_length_sq(g[k]);
+	}
+	float alpha_tilde = block->compliance[c] * inverse_h_squared;
+	denominator += alpha_tilde;
+	if (denominator < 1e-30f) {
+		return;
+	}
+	float dlambda = (-C - alpha_tilde * block->lambda[c]) / denominator;
+	block->lambda[c] += dlambda;
+	for (int k = 0; k < 4; ++k) {
+		x[q[k]] = v3_mul_add(x[q[k]], wq[k] * dlambda, g[k]);
+	}
+}
+
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared)
 {
 	vec3 *x = particles->x;
 	const float *w = particles->w;
-	for (int c = 0; c < block->count; ++c) {
-		const int *q = block->quad[c];
-		float wq[4] = {w[q[0]], w[q[1]], w[q[2]], w[q[3]]};
-		if (wq[0] + wq[1] + wq[2] + wq[3] == 0.0f) {
-			continue;
-		}
-		float angle;
-		vec3 g[4];
-		if (!plait_dihedral_angle(x[q[0]], x[q[1]], x[q[2]], x[q[3]], &angle, g)) {
-			continue;
-		}
-		float C = angle - block->rest_angle[c];
-		/* The shortest way round: a fold through +-pi must not unwind the long way. */
-		if (C > PLAIT_PI) {
-			C -= 2.0f * PLAIT_PI;
-		} else if (C < -PLAIT_PI) {
-			C += 2.0f * PLAIT_PI;
-		}
-		float denominator = 0.0f;
-		for (int k = 0; k < 4; ++k) {
-			denominator += wq[k] * v3_length_sq(g[k]);
-		}
-		float alpha_tilde = block->compliance[c] * inverse_h_squared;
-		denominator += alpha_tilde;
-		if (denominator < 1e-30f) {
-			continue;
-		}
-		float dlambda = (-C - alpha_tilde * block->lambda[c]) / denominator;
-		block->lambda[c] += dlambda;
-		for (int k = 0; k < 4; ++k) {
-			x[q[k]] = v3_mul_add(x[q[k]], wq[k] * dlambda, g[k]);
-		}
+	int batches = block->batch_count;
+	for (int b = 0; b < batches; ++b) {
+		int first = block->batch_start[b];
+		project_bend_batch(block, x, w, first, block->batch_start[b + 1] - first, inverse_h_squared);
+	}
+	for (int c = batches > 0 ? block->batch_start[batches] : 0; c < block->count; ++c) {
+		project_bend(block, x, w, c, inverse_h_squared);
 	}
 }
 

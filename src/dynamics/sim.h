@@ -79,6 +79,8 @@ typedef struct plait_bend_block {
 	float *rest_angle;
 	float *compliance;
 	float *lambda;
+	int batch_count, batch_capacity; /* as for distance blocks */
+	int *batch_start;
 } plait_bend_block;
 
 /* Curve bend: distance of p1 from the midpoint of p0 and p2 (zero for a straight rest). */

@@ -68,6 +68,7 @@ void plait_sim_destroy(plait_sim *sim)
 	FREE_FIELD(sim->bend, rest_angle);
 	FREE_FIELD(sim->bend, compliance);
 	FREE_FIELD(sim->bend, lambda);
+	FREE_FIELD(sim->bend, batch_start);
 	FREE_FIELD(sim->rod_bend, triple);
 	FREE_FIELD(sim->rod_bend, rest);
 	FREE_FIELD(sim->rod_bend, compliance);
@@ -331,6 +332,8 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		++bend_kept;
 	}
 	bend->count = bend_kept;
+	bend->batch_count = 0;
+	plait_sim_batch_bend(sim, 0);
 
 	plait_rod_bend_block *rod = &sim->rod_bend;
 	int rod_kept = 0;
@@ -382,25 +385,35 @@ static bool permute(const plait_allocator *allocator, void *data, size_t size, i
 	return true;
 }
 
+/* Appends batches of the given sizes, starting at first, to a block's batch list. */
+static bool record_batches(const plait_allocator *a, int **batch_start, int *batch_count, int *batch_capacity,
+                           int first, const int *sizes, int batches)
+{
+	int needed = *batch_count + batches + 1;
+	if (needed > *batch_capacity) {
+		int capacity = needed + needed / 2;
+		if (!grow_array(a, (void **)batch_start, sizeof(int), *batch_count + 1, capacity)) {
+			return false;
+		}
+		*batch_capacity = capacity;
+	}
+	int start = first;
+	(*batch_start)[*batch_count] = start;
+	for (int k = 0; k < batches; ++k) {
+		start += sizes[k];
+		(*batch_start)[++*batch_count] = start;
+	}
+	return true;
+}
+
 bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first)
 {
 	int batched = b->batch_count > 0 ? b->batch_start[b->batch_count] : 0;
-	if (batched != first) {
-		return false; /* batches must stay contiguous from 0 */
-	}
 	int count = b->count - first;
-	if (count <= 0) {
-		return true;
+	if (batched != first || count <= 0) {
+		return batched == first; /* batches must stay contiguous from 0 */
 	}
 	const plait_allocator *a = &sim->allocator;
-	int needed = b->batch_count + count + 1;
-	if (needed > b->batch_capacity) {
-		int capacity = needed + needed / 2;
-		if (!grow_array(a, (void **)&b->batch_start, sizeof(int), b->batch_count + 1, capacity)) {
-			return false;
-		}
-		b->batch_capacity = capacity;
-	}
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
 	int batches = order != NULL && sizes != NULL
@@ -409,15 +422,8 @@ bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first
 	bool ok = batches >= 0 && permute(a, b->pair, sizeof *b->pair, first, count, order) &&
 	          permute(a, b->rest, sizeof(float), first, count, order) &&
 	          permute(a, b->compliance_tension, sizeof(float), first, count, order) &&
-	          permute(a, b->compliance_compression, sizeof(float), first, count, order);
-	if (ok) {
-		int start = first;
-		b->batch_start[b->batch_count] = start;
-		for (int k = 0; k < batches; ++k) {
-			start += sizes[k];
-			b->batch_start[++b->batch_count] = start;
-		}
-	}
+	          permute(a, b->compliance_compression, sizeof(float), first, count, order) &&
+	          record_batches(a, &b->batch_start, &b->batch_count, &b->batch_capacity, first, sizes, batches);
 	plait_free(a, order);
 	plait_free(a, sizes);
 	return ok;
@@ -426,18 +432,21 @@ bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first
 bool plait_sim_batch_bend(plait_sim *sim, int first)
 {
 	plait_bend_block *b = &sim->bend;
+	int batched = b->batch_count > 0 ? b->batch_start[b->batch_count] : 0;
 	int count = b->count - first;
-	if (count <= 1) {
-		return true;
+	if (batched != first || count <= 0) {
+		return batched == first;
 	}
 	const plait_allocator *a = &sim->allocator;
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	bool ok = order != NULL && sizes != NULL &&
-	          plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes) >= 0 &&
-	          permute(a, b->quad, sizeof *b->quad, first, count, order) &&
+	int batches = order != NULL && sizes != NULL
+	                  ? plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
+	                  : -1;
+	bool ok = batches >= 0 && permute(a, b->quad, sizeof *b->quad, first, count, order) &&
 	          permute(a, b->rest_angle, sizeof(float), first, count, order) &&
-	          permute(a, b->compliance, sizeof(float), first, count, order);
+	          permute(a, b->compliance, sizeof(float), first, count, order) &&
+	          record_batches(a, &b->batch_start, &b->batch_count, &b->batch_capacity, first, sizes, batches);
 	plait_free(a, order);
 	plait_free(a, sizes);
 	return ok;
