@@ -697,3 +697,141 @@ Test(ccd_constructed, invalid_input_is_a_hit_at_zero)
 	cr_expect(vertex_face(&m, 0.0, &toi));
 	cr_expect_eq(toi, 0.0);
 }
+
+/* ---- random motions against a sampled reference ---------------------------------------------- */
+
+static double dot3(const double a[3], const double b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void sub3(const double a[3], const double b[3], double out[3])
+{
+	for (int k = 0; k < 3; k++)
+		out[k] = a[k] - b[k];
+}
+
+static void cross3(const double a[3], const double b[3], double out[3])
+{
+	out[0] = a[1] * b[2] - a[2] * b[1];
+	out[1] = a[2] * b[0] - a[0] * b[2];
+	out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double point_segment_distance(const double p[3], const double a[3], const double b[3])
+{
+	double ab[3], ap[3], closest[3];
+	sub3(b, a, ab);
+	sub3(p, a, ap);
+	double length2 = dot3(ab, ab), s = length2 > 0.0 ? dot3(ap, ab) / length2 : 0.0;
+	s = s < 0.0 ? 0.0 : s > 1.0 ? 1.0 : s;
+	for (int k = 0; k < 3; k++)
+		closest[k] = a[k] + s * ab[k] - p[k];
+	return sqrt(dot3(closest, closest));
+}
+
+/* The distance to the plane if p projects inside the triangle, else to the nearest edge. */
+static double point_triangle_distance(const double p[3], const double a[3], const double b[3],
+                                      const double c[3])
+{
+	const double *corner[3] = {a, b, c};
+	double ab[3], ac[3], n[3];
+	sub3(b, a, ab);
+	sub3(c, a, ac);
+	cross3(ab, ac, n);
+	bool inside = dot3(n, n) > 0.0;
+	for (int i = 0; i < 3 && inside; i++) {
+		double edge[3], to_p[3], side[3];
+		sub3(corner[(i + 1) % 3], corner[i], edge);
+		sub3(p, corner[i], to_p);
+		cross3(edge, to_p, side);
+		inside = dot3(side, n) >= 0.0;
+	}
+	if (inside) {
+		double ap[3];
+		sub3(p, a, ap);
+		return fabs(dot3(ap, n)) / sqrt(dot3(n, n));
+	}
+	return fmin(point_segment_distance(p, a, b),
+	            fmin(point_segment_distance(p, b, c), point_segment_distance(p, c, a)));
+}
+
+/* The closest points of the two lines if both lie on the segments, else an endpoint's distance. */
+static double segment_distance(const double a0[3], const double a1[3], const double b0[3], const double b1[3])
+{
+	double best = fmin(fmin(point_segment_distance(a0, b0, b1), point_segment_distance(a1, b0, b1)),
+	                   fmin(point_segment_distance(b0, a0, a1), point_segment_distance(b1, a0, a1)));
+	double d1[3], d2[3], r[3];
+	sub3(a1, a0, d1);
+	sub3(b1, b0, d2);
+	sub3(a0, b0, r);
+	double a = dot3(d1, d1), e = dot3(d2, d2), b = dot3(d1, d2), c = dot3(d1, r), f = dot3(d2, r);
+	double denominator = a * e - b * b;
+	if (denominator > 1e-12 * a * e) {
+		double s = (b * f - c * e) / denominator, t = (a * f - b * c) / denominator;
+		if (s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0) {
+			double gap[3];
+			for (int k = 0; k < 3; k++)
+				gap[k] = a0[k] + s * d1[k] - b0[k] - t * d2[k];
+			best = fmin(best, sqrt(dot3(gap, gap)));
+		}
+	}
+	return best;
+}
+
+static double distance_at(const plait_ccd_motion *m, bool vertex_face, double t)
+{
+	double x[4][3];
+	for (int i = 0; i < 4; i++) {
+		for (int k = 0; k < 3; k++)
+			x[i][k] = m->start[i][k] + t * (m->end[i][k] - m->start[i][k]);
+	}
+	return vertex_face ? point_triangle_distance(x[0], x[1], x[2], x[3])
+	                   : segment_distance(x[0], x[1], x[2], x[3]);
+}
+
+/* xorshift64*: a fixed sequence, the same on every machine. */
+static double random_unit(unsigned long long *state)
+{
+	*state ^= *state >> 12;
+	*state ^= *state << 25;
+	*state ^= *state >> 27;
+	return (double)((*state * 2685821657736338717ull) >> 11) * 0x1p-53 * 2.0 - 1.0;
+}
+
+Test(ccd_random, thickness_never_missed_by_samples)
+{
+	unsigned long long state = 0x9e3779b97f4a7c15ull;
+	const int samples = 256;
+	const double distances[3] = {0.01, 0.05, 0.2};
+	int contacts = 0, queries = 0;
+	for (int n = 0; n < 3000; n++) {
+		plait_ccd_motion m;
+		for (int i = 0; i < 4; i++) {
+			for (int k = 0; k < 3; k++) {
+				m.start[i][k] = random_unit(&state);
+				m.end[i][k] = m.start[i][k] + random_unit(&state);
+			}
+		}
+		for (int kind = 0; kind < 2; kind++) {
+			bool is_vertex_face = kind == 0;
+			double d = distances[n % 3], toi, toi_touch;
+			bool hit = is_vertex_face ? vertex_face(&m, d, &toi) : edge_edge(&m, d, &toi);
+			bool touch = is_vertex_face ? vertex_face(&m, 0.0, &toi_touch) : edge_edge(&m, 0.0, &toi_touch);
+			queries++;
+			cr_expect(!touch || hit, "query %d: touching but not within %g", n, d);
+			for (int i = 0; i <= samples; i++) {
+				double t = (double)i / samples;
+				if (distance_at(&m, is_vertex_face, t) <= d * (1.0 - 1e-9)) {
+					contacts++;
+					cr_expect(hit, "query %d %s: within %g at t = %g but no hit", n,
+					          is_vertex_face ? "vf" : "ee", d, t);
+					cr_expect_leq(toi, t, "query %d: toi %g after a sampled contact at %g", n, toi, t);
+					break;
+				}
+			}
+		}
+	}
+	cr_log_info("random motions: %d queries, %d with a sampled contact", queries, contacts);
+	cr_expect_gt(contacts, queries / 20, "too few contacts to mean anything");
+}

@@ -59,10 +59,17 @@ typedef struct ccd_box {
 	double lo[3], hi[3];
 } ccd_box;
 
-/* F at the eight corners of a box; bit 0 of the index selects the upper end in t, bit 1 in u, bit 2
- * in v. (Wrapped in a struct so that const pointers to it need no casts in C11.) */
+/* F at sample points of a box whose hull holds F over the box: the eight corners (bit 0 of the
+ * index selects the upper end in t, bit 1 in u, bit 2 in v), or for a vertex-face box crossing the
+ * triangle's slanted side, the corners of the part inside the triangle at both times. (A struct so
+ * that const pointers to it need no casts in C11.) */
 typedef struct ccd_corners {
-	double f[8][3];
+	double f[10][3];
+	double time[10];
+	double u[10], v[10];
+	/* The sample lies in the domain (a corner beyond the slanted side does not). */
+	bool inside[10];
+	int count;
 } ccd_corners;
 
 /* A 3x3 matrix stored as three vectors (columns or rows, as named). */
@@ -165,22 +172,60 @@ static bool ccd_motion_in_range(const plait_ccd_motion *motion)
 	return true;
 }
 
-/* F at the corners of a box. Every F value that a decision rests on is computed here, in exactly
+/* F at (t0, u, v) and (t1, u, v). Every F value that a decision rests on is computed here, in exactly
  * the order the bound of ccd_set_value_bounds assumes. */
+static void ccd_values_at(const ccd_problem *p, double u, double v, double t0, double t1, double f0[3],
+                          double f1[3])
+{
+	for (int k = 0; k < 3; k++) {
+		double start = p->e[0][k] + u * p->g[0][k] + v * p->h[0][k];
+		double motion = (p->e[1][k] + u * p->g[1][k] + v * p->h[1][k]) - start;
+		f0[k] = start + t0 * motion;
+		f1[k] = start + t1 * motion;
+	}
+}
+
+static void ccd_add_samples(const ccd_problem *p, const ccd_box *box, double u, double v,
+                            ccd_corners *samples)
+{
+	int i = samples->count;
+	ccd_values_at(p, u, v, box->lo[CCD_T], box->hi[CCD_T], samples->f[i], samples->f[i + 1]);
+	samples->time[i] = box->lo[CCD_T];
+	samples->time[i + 1] = box->hi[CCD_T];
+	samples->u[i] = samples->u[i + 1] = u;
+	samples->v[i] = samples->v[i + 1] = v;
+	/* u and v are dyadic split points, so u + v is exact. */
+	samples->inside[i] = samples->inside[i + 1] = !p->triangle_domain || u + v <= 1.0;
+	samples->count += 2;
+}
+
 static void ccd_corner_values(const ccd_problem *p, const ccd_box *box, ccd_corners *corners)
 {
-	double(*f)[3] = corners->f;
-	double t0 = box->lo[CCD_T], t1 = box->hi[CCD_T];
-	for (int j = 0; j < 4; j++) {
-		double u = (j & 1) ? box->hi[CCD_U] : box->lo[CCD_U];
-		double v = (j & 2) ? box->hi[CCD_V] : box->lo[CCD_V];
-		for (int k = 0; k < 3; k++) {
-			double start = p->e[0][k] + u * p->g[0][k] + v * p->h[0][k];
-			double motion = (p->e[1][k] + u * p->g[1][k] + v * p->h[1][k]) - start;
-			f[2 * j][k] = start + t0 * motion;
-			f[2 * j + 1][k] = start + t1 * motion;
-		}
-	}
+	corners->count = 0;
+	for (int j = 0; j < 4; j++)
+		ccd_add_samples(p, box, (j & 1) ? box->hi[CCD_U] : box->lo[CCD_U],
+		                (j & 2) ? box->hi[CCD_V] : box->lo[CCD_V], corners);
+}
+
+static bool ccd_box_crosses_slanted_side(const ccd_problem *p, const ccd_box *box)
+{
+	return p->triangle_domain && box->hi[CCD_U] + box->hi[CCD_V] > 1.0;
+}
+
+/* The part of the box's (u, v) square inside the triangle is the hull of (u0, v0), the two ends of
+ * its sides along u = u0 and v = v0, and the two points where the slanted side leaves the square
+ * (some of these coincide). At a fixed time F is affine in (u, v), so over that part it lies in the
+ * hull of its values there; 1 - u and 1 - v are exact for dyadic u, v. */
+static void ccd_clipped_values(const ccd_problem *p, const ccd_box *box, ccd_corners *samples)
+{
+	double u0 = box->lo[CCD_U], v0 = box->lo[CCD_V];
+	double u_end = ccd_min(box->hi[CCD_U], 1.0 - v0), v_end = ccd_min(box->hi[CCD_V], 1.0 - u0);
+	samples->count = 0;
+	ccd_add_samples(p, box, u0, v0, samples);
+	ccd_add_samples(p, box, u_end, v0, samples);
+	ccd_add_samples(p, box, u0, v_end, samples);
+	ccd_add_samples(p, box, u_end, 1.0 - u_end, samples);
+	ccd_add_samples(p, box, 1.0 - v_end, v_end, samples);
 }
 
 /* A corner value has rounding depth 7 counted from the exact differences of input points (one
@@ -422,7 +467,7 @@ static bool ccd_corners_excluded(const ccd_problem *p, const ccd_corners *corner
 	double mean[3], largest[3];
 	for (int k = 0; k < 3; k++) {
 		double lo = f[0][k], hi = f[0][k], sum = f[0][k];
-		for (int c = 1; c < 8; c++) {
+		for (int c = 1; c < corners->count; c++) {
 			lo = ccd_min(lo, f[c][k]);
 			hi = ccd_max(hi, f[c][k]);
 			sum += f[c][k];
@@ -440,7 +485,7 @@ static bool ccd_corners_excluded(const ccd_problem *p, const ccd_corners *corner
 		slack += fabs(mean[k]) * (p->value_error[k] + 4.0 * CCD_ROUNDOFF * largest[k]);
 	double reach = p->distance > 0.0 ? p->distance * ccd_norm(mean) * (1.0 + 8.0 * CCD_ROUNDOFF) : 0.0;
 	double limit = (reach + slack) * (1.0 + 8.0 * CCD_ROUNDOFF) + CCD_UNDERFLOW_SLACK;
-	for (int c = 0; c < 8; c++) {
+	for (int c = 0; c < corners->count; c++) {
 		if (!(ccd_dot(mean, f[c]) > limit))
 			return false;
 	}
@@ -752,28 +797,57 @@ static bool ccd_certify_flat(const ccd_problem *p, const ccd_flat *flat, const c
 	return found;
 }
 
-/* With d > 0 a corner of the box inside the domain whose distance is certainly below d is a
- * contact; the earliest such corner is reported. */
-static bool ccd_certify_close_corner(const ccd_problem *p, const ccd_box *box, const ccd_corners *corners,
-                                     double *contact_time)
+/* True when the exact F at (t, u, v) is certainly shorter than d: its components are within
+ * value_error of the computed ones; the rounded square sum gains at most 4u and d * d loses at most
+ * u. */
+static bool ccd_certainly_within(const ccd_problem *p, const double f[3])
 {
-	const double(*f)[3] = corners->f;
+	double upper[3];
+	for (int k = 0; k < 3; k++)
+		upper[k] = fabs(f[k]) + p->value_error[k];
+	return ccd_dot(upper, upper) * (1.0 + 8.0 * CCD_ROUNDOFF) <
+	       p->distance * p->distance * (1.0 - 4.0 * CCD_ROUNDOFF);
+}
+
+/* The earliest s in [0, 1] with |a + s (b - a)| <= r (a root of a quadratic), or a value above 1 if
+ * there is none. An estimate: the caller checks the point it leads to. */
+static double ccd_first_within(const double a[3], const double b[3], double r)
+{
+	double d[3];
+	ccd_subtract(b, a, d);
+	double dd = ccd_dot(d, d), ad = ccd_dot(a, d), excess = ccd_dot(a, a) - r * r;
+	if (excess <= 0.0)
+		return 0.0;
+	double discriminant = ad * ad - dd * excess;
+	if (!(dd > 0.0) || !(ad < 0.0) || !(discriminant >= 0.0))
+		return 2.0;
+	/* The smaller root, in the form that does not cancel. */
+	return excess / (-ad + sqrt(discriminant));
+}
+
+/* With d > 0: a point of the box inside the domain whose distance is certainly below d is a
+ * contact. Along each sampled (u, v) the distance is a quadratic in t, so its first time within d
+ * is solved for (slightly inside, to leave room for rounding) and the point then checked. Returns
+ * the earliest certified time. */
+static bool ccd_certify_close_sample(const ccd_problem *p, const ccd_corners *samples, double *contact_time)
+{
 	bool found = false;
-	double limit = p->distance * p->distance * (1.0 - 4.0 * CCD_ROUNDOFF);
-	for (int c = 0; c < 8; c++) {
-		double u = (c & 2) ? box->hi[CCD_U] : box->lo[CCD_U];
-		double v = (c & 4) ? box->hi[CCD_V] : box->lo[CCD_V];
-		if (p->triangle_domain && u + v > 1.0)
+	for (int c = 0; c + 1 < samples->count; c += 2) {
+		if (!samples->inside[c])
 			continue;
-		double upper[3];
-		for (int k = 0; k < 3; k++)
-			upper[k] = fabs(f[c][k]) + p->value_error[k];
-		/* The rounded square sum gains at most 4u, d * d loses at most u. */
-		if (ccd_dot(upper, upper) * (1.0 + 8.0 * CCD_ROUNDOFF) < limit) {
-			double t = (c & 1) ? box->hi[CCD_T] : box->lo[CCD_T];
-			*contact_time = found ? ccd_min(*contact_time, t) : t;
-			found = true;
+		double s = ccd_first_within(samples->f[c], samples->f[c + 1], p->distance * (1.0 - 0x1p-20));
+		if (!(s <= 1.0))
+			continue;
+		double t0 = samples->time[c], t1 = samples->time[c + 1], t = ccd_min(t0 + s * (t1 - t0), t1);
+		double f[3], unused[3];
+		ccd_values_at(p, samples->u[c], samples->v[c], t, t, f, unused);
+		if (!ccd_certainly_within(p, f)) {
+			t = t1;
+			if (!ccd_certainly_within(p, samples->f[c + 1]))
+				continue;
 		}
+		*contact_time = found ? ccd_min(*contact_time, t) : t;
+		found = true;
 	}
 	return found;
 }
@@ -856,21 +930,39 @@ static void ccd_examine(const ccd_problem *p, ccd_search *search, ccd_box box)
 	}
 	if (ccd_box_outside_domain(p, &box) || !ccd_clip_time(p, &box.lo[CCD_T], &box.hi[CCD_T]))
 		return;
-	ccd_corners corners;
+	ccd_corners corners, clipped;
 	ccd_corner_values(p, &box, &corners);
 	if (ccd_corners_excluded(p, &corners))
 		return;
+	/* A box crossing the triangle's slanted side also covers points beyond the face; judge it by
+	 * the part inside. */
+	const ccd_corners *inside = &corners;
+	if (ccd_box_crosses_slanted_side(p, &box)) {
+		ccd_clipped_values(p, &box, &clipped);
+		if (ccd_corners_excluded(p, &clipped))
+			return;
+		inside = &clipped;
+	}
 
 	/* A certified contact counts only if it moves the cutoff by at least tolerance / 2, so the same
 	 * contact cannot be found over and over. */
 	double contact_time = INFINITY;
-	bool certified = p->distance > 0.0 ? ccd_certify_close_corner(p, &box, &corners, &contact_time)
+	bool certified = p->distance > 0.0 ? ccd_certify_close_sample(p, inside, &contact_time)
 	                 : search->flat    ? ccd_certify_flat(p, search->flat, &box, &contact_time)
 	                                   : ccd_certify_root(p, &box, &contact_time);
 	if (certified && contact_time - 0.5 * p->tolerance < search->cutoff) {
 		ccd_record_contact(p, search, contact_time);
-		/* Look again at the part of the box before the new cutoff. */
-		ccd_push(search, &box);
+		/* Look again at the part of the box before the new cutoff. A root certificate sits at the
+		 * contact, so that part usually clips away at once; a close corner of a thick query may
+		 * be the box's last, so halve the box in time to approach the first contact by
+		 * bisection rather than one tolerance at a time. */
+		box.hi[CCD_T] = ccd_min(box.hi[CCD_T], search->cutoff);
+		if (box.lo[CCD_T] >= box.hi[CCD_T])
+			return;
+		if (p->distance > 0.0)
+			ccd_split(search, &box, CCD_T);
+		else
+			ccd_push(search, &box);
 		return;
 	}
 
