@@ -63,14 +63,14 @@ typedef struct ccd_box {
  * index selects the upper end in t, bit 1 in u, bit 2 in v), or for a vertex-face box crossing the
  * triangle's slanted side, the corners of the part inside the triangle at both times. (A struct so
  * that const pointers to it need no casts in C11.) */
-typedef struct ccd_corners {
+typedef struct ccd_samples {
 	double f[10][3];
 	double time[10];
 	double u[10], v[10];
 	/* The sample lies in the domain (a corner beyond the slanted side does not). */
 	bool inside[10];
 	int count;
-} ccd_corners;
+} ccd_samples;
 
 /* A 3x3 matrix stored as three vectors (columns or rows, as named). */
 typedef struct ccd_matrix {
@@ -186,7 +186,7 @@ static void ccd_values_at(const ccd_problem *p, double u, double v, double t0, d
 }
 
 static void ccd_add_samples(const ccd_problem *p, const ccd_box *box, double u, double v,
-                            ccd_corners *samples)
+                            ccd_samples *samples)
 {
 	int i = samples->count;
 	ccd_values_at(p, u, v, box->lo[CCD_T], box->hi[CCD_T], samples->f[i], samples->f[i + 1]);
@@ -199,7 +199,7 @@ static void ccd_add_samples(const ccd_problem *p, const ccd_box *box, double u, 
 	samples->count += 2;
 }
 
-static void ccd_corner_values(const ccd_problem *p, const ccd_box *box, ccd_corners *corners)
+static void ccd_corner_values(const ccd_problem *p, const ccd_box *box, ccd_samples *corners)
 {
 	corners->count = 0;
 	for (int j = 0; j < 4; j++)
@@ -216,7 +216,7 @@ static bool ccd_box_crosses_slanted_side(const ccd_problem *p, const ccd_box *bo
  * its sides along u = u0 and v = v0, and the two points where the slanted side leaves the square
  * (some of these coincide). At a fixed time F is affine in (u, v), so over that part it lies in the
  * hull of its values there; 1 - u and 1 - v are exact for dyadic u, v. */
-static void ccd_clipped_values(const ccd_problem *p, const ccd_box *box, ccd_corners *samples)
+static void ccd_clipped_values(const ccd_problem *p, const ccd_box *box, ccd_samples *samples)
 {
 	double u0 = box->lo[CCD_U], v0 = box->lo[CCD_V];
 	double u_end = ccd_min(box->hi[CCD_U], 1.0 - v0), v_end = ccd_min(box->hi[CCD_V], 1.0 - u0);
@@ -461,7 +461,7 @@ static bool ccd_clip_time(const ccd_problem *p, double *a, double *b)
 
 /* True when the hull of the corner values provably stays farther than d from the origin, along a
  * coordinate axis or along the box's mean value. */
-static bool ccd_corners_excluded(const ccd_problem *p, const ccd_corners *corners)
+static bool ccd_corners_excluded(const ccd_problem *p, const ccd_samples *corners)
 {
 	const double(*f)[3] = corners->f;
 	double mean[3], largest[3];
@@ -565,7 +565,7 @@ static bool ccd_newton(const ccd_problem *p, const ccd_box *region, double settl
 static bool ccd_miranda(const ccd_problem *p, const ccd_box *box, const ccd_matrix *preconditioner)
 {
 	const double(*rows)[3] = preconditioner->v;
-	ccd_corners corners;
+	ccd_samples corners;
 	ccd_corner_values(p, box, &corners);
 	double(*f)[3] = corners.f;
 	double largest[3] = {0.0, 0.0, 0.0};
@@ -712,7 +712,7 @@ static bool ccd_certify_root_2d(const ccd_problem *p, const ccd_box *box, int i1
 	if (!(test.hi[CCD_T] - test.lo[CCD_T] <= 0.5 * p->tolerance) || !ccd_box_inside_domain(p, &test))
 		return false;
 
-	ccd_corners corners;
+	ccd_samples corners;
 	ccd_corner_values(p, &test, &corners);
 	double largest1 = 0.0, largest2 = 0.0;
 	for (int c = 0; c < 8; c++) {
@@ -829,7 +829,7 @@ static double ccd_first_within(const double a[3], const double b[3], double r)
  * contact. Along each sampled (u, v) the distance is a quadratic in t, so its first time within d
  * is solved for (slightly inside, to leave room for rounding) and the point then checked. Returns
  * the earliest certified time. */
-static bool ccd_certify_close_sample(const ccd_problem *p, const ccd_corners *samples, double *contact_time)
+static bool ccd_certify_close_sample(const ccd_problem *p, const ccd_samples *samples, double *contact_time)
 {
 	bool found = false;
 	for (int c = 0; c + 1 < samples->count; c += 2) {
@@ -859,7 +859,7 @@ static double ccd_min_width(const ccd_problem *p, int i)
 
 /* The dimension along which F changes most over the box, among those still wide enough to split;
  * -1 if none is. */
-static int ccd_split_dimension(const ccd_problem *p, const ccd_box *box, const ccd_corners *corners)
+static int ccd_split_dimension(const ccd_problem *p, const ccd_box *box, const ccd_samples *corners)
 {
 	const double(*f)[3] = corners->f;
 	int best_dimension = -1;
@@ -914,6 +914,61 @@ static void ccd_record_unresolved(ccd_search *search, double start_time)
 	search->cutoff = ccd_min(search->cutoff, start_time);
 }
 
+/* Out of budget or stack space: every box left might hold a contact. */
+static void ccd_give_up(ccd_search *search, const ccd_box *box)
+{
+	for (int i = 0; i < search->count; i++)
+		ccd_record_unresolved(search, search->stack[i].lo[CCD_T]);
+	ccd_record_unresolved(search, box->lo[CCD_T]);
+	search->count = 0;
+}
+
+/* True when the box provably holds no contact (its time interval may shrink on the way). Otherwise
+ * *judged points at the samples the box was judged by: its corners, or for a box crossing the
+ * triangle's slanted side, which also covers points beyond the face, the part inside. */
+static bool ccd_ruled_out(const ccd_problem *p, ccd_box *box, ccd_samples *corners, ccd_samples *clipped,
+                          const ccd_samples **judged)
+{
+	if (ccd_box_outside_domain(p, box) || !ccd_clip_time(p, &box->lo[CCD_T], &box->hi[CCD_T]))
+		return true;
+	ccd_corner_values(p, box, corners);
+	if (ccd_corners_excluded(p, corners))
+		return true;
+	*judged = corners;
+	if (ccd_box_crosses_slanted_side(p, box)) {
+		ccd_clipped_values(p, box, clipped);
+		if (ccd_corners_excluded(p, clipped))
+			return true;
+		*judged = clipped;
+	}
+	return false;
+}
+
+static bool ccd_certify(const ccd_problem *p, const ccd_search *search, const ccd_box *box,
+                        const ccd_samples *judged, double *contact_time)
+{
+	if (p->distance > 0.0)
+		return ccd_certify_close_sample(p, judged, contact_time);
+	if (search->flat)
+		return ccd_certify_flat(p, search->flat, box, contact_time);
+	return ccd_certify_root(p, box, contact_time);
+}
+
+/* Looks again at the part of the box before the cutoff a new contact set. A root certificate sits
+ * at the contact, so that part usually clips away at once; a close sample of a thick query may be at
+ * the box's end, so the box is halved in time to approach the first contact by bisection rather
+ * than one tolerance at a time. */
+static void ccd_search_before_contact(const ccd_problem *p, ccd_search *search, ccd_box box)
+{
+	box.hi[CCD_T] = ccd_min(box.hi[CCD_T], search->cutoff);
+	if (box.lo[CCD_T] >= box.hi[CCD_T])
+		return;
+	if (p->distance > 0.0)
+		ccd_split(search, &box, CCD_T);
+	else
+		ccd_push(search, &box);
+}
+
 /* Examines one box: discards it, certifies a contact in or near it, or splits it. */
 static void ccd_examine(const ccd_problem *p, ccd_search *search, ccd_box box)
 {
@@ -922,47 +977,21 @@ static void ccd_examine(const ccd_problem *p, ccd_search *search, ccd_box box)
 		return;
 	box.hi[CCD_T] = ccd_min(box.hi[CCD_T], search->cutoff);
 	if (search->budget-- <= 0 || search->count > CCD_STACK_CAPACITY - 2) {
-		for (int i = 0; i < search->count; i++)
-			ccd_record_unresolved(search, search->stack[i].lo[CCD_T]);
-		ccd_record_unresolved(search, box.lo[CCD_T]);
-		search->count = 0;
+		ccd_give_up(search, &box);
 		return;
 	}
-	if (ccd_box_outside_domain(p, &box) || !ccd_clip_time(p, &box.lo[CCD_T], &box.hi[CCD_T]))
+	ccd_samples corners, clipped;
+	const ccd_samples *judged;
+	if (ccd_ruled_out(p, &box, &corners, &clipped, &judged))
 		return;
-	ccd_corners corners, clipped;
-	ccd_corner_values(p, &box, &corners);
-	if (ccd_corners_excluded(p, &corners))
-		return;
-	/* A box crossing the triangle's slanted side also covers points beyond the face; judge it by
-	 * the part inside. */
-	const ccd_corners *inside = &corners;
-	if (ccd_box_crosses_slanted_side(p, &box)) {
-		ccd_clipped_values(p, &box, &clipped);
-		if (ccd_corners_excluded(p, &clipped))
-			return;
-		inside = &clipped;
-	}
 
 	/* A certified contact counts only if it moves the cutoff by at least tolerance / 2, so the same
 	 * contact cannot be found over and over. */
 	double contact_time = INFINITY;
-	bool certified = p->distance > 0.0 ? ccd_certify_close_sample(p, inside, &contact_time)
-	                 : search->flat    ? ccd_certify_flat(p, search->flat, &box, &contact_time)
-	                                   : ccd_certify_root(p, &box, &contact_time);
-	if (certified && contact_time - 0.5 * p->tolerance < search->cutoff) {
+	if (ccd_certify(p, search, &box, judged, &contact_time) &&
+	    contact_time - 0.5 * p->tolerance < search->cutoff) {
 		ccd_record_contact(p, search, contact_time);
-		/* Look again at the part of the box before the new cutoff. A root certificate sits at the
-		 * contact, so that part usually clips away at once; a close corner of a thick query may
-		 * be the box's last, so halve the box in time to approach the first contact by
-		 * bisection rather than one tolerance at a time. */
-		box.hi[CCD_T] = ccd_min(box.hi[CCD_T], search->cutoff);
-		if (box.lo[CCD_T] >= box.hi[CCD_T])
-			return;
-		if (p->distance > 0.0)
-			ccd_split(search, &box, CCD_T);
-		else
-			ccd_push(search, &box);
+		ccd_search_before_contact(p, search, box);
 		return;
 	}
 
