@@ -35,6 +35,8 @@ enum { CCD_T, CCD_U, CCD_V };
 #define CCD_NEWTON_ITERATIONS 8
 /* Half-width in u and v of the box that certifies a root, unless rounding needs more. */
 #define CCD_CERTIFY_RADIUS 0x1p-24
+/* With a thickness d, near misses within d (1 + this) may be reported as contacts. */
+#define CCD_DISTANCE_SLACK 0x1p-10
 
 typedef struct ccd_problem {
 	/* F at t = s is e[s] + u g[s] + v h[s]; F(t) = F(0) + t (F(1) - F(0)). */
@@ -45,8 +47,13 @@ typedef struct ccd_problem {
 	double value_limit[3];
 	/* Bernstein coefficients on [0, 1] of the cubic det(G(t), H(t), E(t)). */
 	double cubic[4];
-	/* A computed blossom value of the cubic beyond +-cubic_limit means no contact then. */
+	/* A computed blossom value of the cubic beyond +-cubic_limit means no contact then (d = 0). */
 	double cubic_limit;
+	/* With d > 0, the band is d |n(t)| over the interval: n = G x H has Bernstein coefficients
+	 * normal[i]; normal_error bounds the error of the norm of any computed blossom of them, and
+	 * blossom_error that of the cubic's. */
+	double normal[3][3];
+	double normal_error, blossom_error;
 	double distance;
 	double tolerance;
 	double max_time;
@@ -286,16 +293,22 @@ static void ccd_set_cubic(ccd_problem *p)
 	 * value and passing earlier errors on undamped. */
 	double blossom_error = coefficient_error + 16.0 * CCD_ROUNDOFF * largest;
 
-	double band = 0.0;
-	if (p->distance > 0.0) {
-		/* |n(t)| is at most the largest norm of n's Bernstein coefficients n00, mixed / 2, n11 (convex
-		 * hull), each computed within 5 u of its absolute-value version. */
-		double largest_normal = ccd_max(ccd_max(ccd_norm(n00) + 5.0 * CCD_ROUNDOFF * ccd_norm(a00),
-		                                        ccd_norm(n11) + 5.0 * CCD_ROUNDOFF * ccd_norm(a11)),
-		                                0.5 * (ccd_norm(mixed) + 5.0 * CCD_ROUNDOFF * ccd_norm(amixed)));
-		band = p->distance * largest_normal * (1.0 + 16.0 * CCD_ROUNDOFF);
+	p->blossom_error = blossom_error;
+	p->cubic_limit = blossom_error * (1.0 + 8.0 * CCD_ROUNDOFF) + CCD_UNDERFLOW_SLACK;
+
+	/* n's Bernstein coefficients n00, mixed / 2, n11, each computed within 5 u of its absolute-value
+	 * version (at most 4 roundings); two de Casteljau levels add at most 10.02 u of the largest
+	 * norm per component, so 18 u of it in norm. */
+	for (int k = 0; k < 3; k++) {
+		p->normal[0][k] = n00[k];
+		p->normal[1][k] = 0.5 * mixed[k];
+		p->normal[2][k] = n11[k];
 	}
-	p->cubic_limit = (band + blossom_error) * (1.0 + 8.0 * CCD_ROUNDOFF) + CCD_UNDERFLOW_SLACK;
+	double largest_normal = ccd_max(ccd_max(ccd_norm(n00), ccd_norm(n11)), 0.5 * ccd_norm(mixed));
+	double coefficient_normal_error =
+	    5.0 * CCD_ROUNDOFF * ccd_max(ccd_max(ccd_norm(a00), ccd_norm(a11)), 0.5 * ccd_norm(amixed));
+	p->normal_error =
+	    coefficient_normal_error + 18.0 * CCD_ROUNDOFF * (largest_normal + coefficient_normal_error);
 }
 
 static void ccd_problem_init(ccd_problem *p, const plait_ccd_motion *motion, bool vertex_face,
@@ -424,11 +437,32 @@ static double ccd_crossing(int i, double yi, int j, double yj, double y)
 /* Narrows [*a, *b] to a subinterval holding every t in it with |c(t)| <= band (Bezier clipping): the
  * cubic lies in the convex hull of its control points (a + i (b - a) / 3, beta_i), so it can only
  * reach the band where that hull does. Returns false when it nowhere does: no contact then. */
+/* With d > 0: an upper bound of d |n(t)| for t in [a, b]. |n(t)| is at most the largest norm of the
+ * Bernstein coefficients of n on [a, b] (convex hull), its blossom values n(a,a), n(a,b), n(b,b). */
+static double ccd_band(const ccd_problem *p, double a, double b)
+{
+	double largest = 0.0;
+	for (int i = 0; i < 3; i++) {
+		double blossom[3];
+		for (int k = 0; k < 3; k++) {
+			double first = ccd_lerp(p->normal[0][k], p->normal[1][k], i == 2 ? b : a);
+			double second = ccd_lerp(p->normal[1][k], p->normal[2][k], i == 2 ? b : a);
+			blossom[k] = ccd_lerp(first, second, i == 0 ? a : b);
+		}
+		largest = ccd_max(largest, ccd_norm(blossom));
+	}
+	/* The norm's own rounding (square root included) is below 4u. */
+	return p->distance * (largest * (1.0 + 4.0 * CCD_ROUNDOFF) + p->normal_error) *
+	       (1.0 + 4.0 * CCD_ROUNDOFF);
+}
+
 static bool ccd_clip_time(const ccd_problem *p, double *a, double *b)
 {
 	double beta[4];
 	ccd_cubic_on(p, *a, *b, beta);
-	double limit = p->cubic_limit;
+	double limit = p->distance > 0.0 ? (ccd_band(p, *a, *b) + p->blossom_error) * (1.0 + 8.0 * CCD_ROUNDOFF) +
+	                                       CCD_UNDERFLOW_SLACK
+	                                 : p->cubic_limit;
 	/* The hull meets the band between the extreme abscissas of the control points inside it and of
 	 * the crossings of the segments between control points with the band's edges. */
 	double lo = 4.0, hi = -1.0;
@@ -852,6 +886,29 @@ static bool ccd_certify_close_sample(const ccd_problem *p, const ccd_samples *sa
 	return found;
 }
 
+/* With a thickness, proving that nothing came within d just before a contact can take ever finer
+ * boxes around the point where the distance first reaches d (near-tangent approaches). A box that
+ * cannot be ruled out, spans at most the tolerance in time and over which F varies by at most
+ * slack d / sqrt(3) per component holds a point within d (1 + slack): the mean m of its samples is
+ * F at a point of the box, and the failed direction test means some sample c has m . F_c <= d |m|,
+ * so |m| <= d + |F_c - m|. Such a box is reported as a contact from its start time on. */
+static bool ccd_near_contact(const ccd_problem *p, const ccd_box *box, const ccd_samples *samples)
+{
+	if (!(p->distance > 0.0) || !(box->hi[CCD_T] - box->lo[CCD_T] <= p->tolerance))
+		return false;
+	double allowed = CCD_DISTANCE_SLACK * p->distance * 0.57735;
+	for (int k = 0; k < 3; k++) {
+		double lo = samples->f[0][k], hi = samples->f[0][k];
+		for (int c = 1; c < samples->count; c++) {
+			lo = ccd_min(lo, samples->f[c][k]);
+			hi = ccd_max(hi, samples->f[c][k]);
+		}
+		if (!(hi - lo <= allowed))
+			return false;
+	}
+	return true;
+}
+
 static double ccd_min_width(const ccd_problem *p, int i)
 {
 	return i == CCD_T ? CCD_MIN_WIDTH * p->max_time : CCD_MIN_WIDTH;
@@ -995,6 +1052,10 @@ static void ccd_examine(const ccd_problem *p, ccd_search *search, ccd_box box)
 		return;
 	}
 
+	if (ccd_near_contact(p, &box, judged)) {
+		ccd_record_unresolved(search, box.lo[CCD_T]);
+		return;
+	}
 	int i = ccd_split_dimension(p, &box, &corners);
 	if (i < 0) {
 		ccd_record_unresolved(search, box.lo[CCD_T]);

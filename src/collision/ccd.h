@@ -11,11 +11,13 @@
  * the first edge, points 2, 3 the second.
  *
  * minimum_distance: the contact distance (thickness); 0 tests for touching. A query reports a hit
- *   when the primitives come within this distance for some t in [0, max_time].
+ *   when the primitives come within this distance for some t in [0, max_time]. (It may also report
+ *   a near miss within (1 + 2^-10) times it, where telling the two apart would take boxes finer
+ *   than the tolerance in time.)
  * tolerance: accuracy of the time of impact, in units of t. When the contact is certified,
  *   first_contact - tolerance <= toi <= first_contact. It never turns a near miss into a hit.
  *   PLAIT_CCD_DEFAULT_TOLERANCE (1e-6) costs little when touching (minimum_distance 0); with a
- *   thickness, hits cost more the finer the tolerance, and 1e-4 is much cheaper (docs/ccd.md).
+ *   thickness, hits cost more the finer the tolerance, and 1e-4 is cheaper (docs/ccd.md).
  * max_time: end of the tested interval, in [0, 1]; larger values are clamped to 1.
  * toi: receives the time of impact on a hit, max_time otherwise. Never after the first contact.
  *
