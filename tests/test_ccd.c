@@ -477,12 +477,12 @@ static plait_ccd_motion transformed(plait_ccd_motion m, double scale, double off
 	return m;
 }
 
-static bool vertex_face(const plait_ccd_motion *m, double distance, double *toi)
+static bool hit_vertex_face(const plait_ccd_motion *m, double distance, double *toi)
 {
 	return plait_ccd_vertex_face(m, distance, TOL, 1.0, toi);
 }
 
-static bool edge_edge(const plait_ccd_motion *m, double distance, double *toi)
+static bool hit_edge_edge(const plait_ccd_motion *m, double distance, double *toi)
 {
 	return plait_ccd_edge_edge(m, distance, TOL, 1.0, toi);
 }
@@ -516,7 +516,7 @@ Test(ccd_constructed, point_through_triangle)
 {
 	double a[3] = {0.25, 0.25, 1.0}, b[3] = {0.25, 0.25, -1.0}, toi;
 	plait_ccd_motion m = vertex_and_triangle(a, b);
-	bool hit = vertex_face(&m, 0.0, &toi);
+	bool hit = hit_vertex_face(&m, 0.0, &toi);
 	expect_hit_at(hit, toi, 0.5);
 }
 
@@ -524,12 +524,12 @@ Test(ccd_constructed, clearly_separated)
 {
 	double a[3] = {3.0, 3.0, 1.0}, b[3] = {3.0, 3.0, -1.0}, toi = -1.0;
 	plait_ccd_motion m = vertex_and_triangle(a, b);
-	cr_expect_not(vertex_face(&m, 0.0, &toi));
+	cr_expect_not(hit_vertex_face(&m, 0.0, &toi));
 	cr_expect_eq(toi, 1.0, "toi is max_time without a hit");
 	double b0[3] = {0, 5, 1}, b1[3] = {1, 5, 1}, a0[3] = {0, 0, 0}, a1[3] = {1, 0, 0},
 	       move[3] = {0.0, 1.0, 0.0};
 	plait_ccd_motion e = two_edges(a0, a1, b0, b1, move);
-	cr_expect_not(edge_edge(&e, 0.0, &toi));
+	cr_expect_not(hit_edge_edge(&e, 0.0, &toi));
 }
 
 Test(ccd_constructed, grazing_contact_on_an_edge)
@@ -537,16 +537,16 @@ Test(ccd_constructed, grazing_contact_on_an_edge)
 	/* Crosses the plane exactly on the triangle's edge y = 0 at t = 0.5. */
 	double a[3] = {0.5, -1.0, 1.0}, b[3] = {0.5, 1.0, -1.0}, toi;
 	plait_ccd_motion m = vertex_and_triangle(a, b);
-	bool hit = vertex_face(&m, 0.0, &toi);
+	bool hit = hit_vertex_face(&m, 0.0, &toi);
 	expect_hit_at(hit, toi, 0.5);
 	/* The same path shifted 1e-9 outside the edge misses. */
 	double c[3] = {0.5, -1.0 - 2e-9, 1.0}, d[3] = {0.5, 1.0 - 2e-9, -1.0};
 	m = vertex_and_triangle(c, d);
-	cr_expect_not(vertex_face(&m, 0.0, &toi), "a 1e-9 near miss counted as contact");
+	cr_expect_not(hit_vertex_face(&m, 0.0, &toi), "a 1e-9 near miss counted as contact");
 	/* Edge-edge: two crossing edges whose lines meet exactly at an endpoint at t = 0.5. */
 	double a0[3] = {0, 0, 0}, a1[3] = {1, 0, 0}, b0[3] = {1, -1, 1}, b1[3] = {1, 1, 1}, move[3] = {0, 0, -2};
 	plait_ccd_motion e = two_edges(a0, a1, b0, b1, move);
-	hit = edge_edge(&e, 0.0, &toi);
+	hit = hit_edge_edge(&e, 0.0, &toi);
 	expect_hit_at(hit, toi, 0.5);
 }
 
@@ -556,16 +556,16 @@ Test(ccd_constructed, parallel_edges)
 	/* Overlapping in x, closing in y: they meet along a segment at t = 0.5. */
 	double b0[3] = {0.5, 1, 0}, b1[3] = {1.5, 1, 0}, move[3] = {0, -2, 0};
 	plait_ccd_motion m = two_edges(a0, a1, b0, b1, move);
-	bool hit = edge_edge(&m, 0.0, &toi);
+	bool hit = hit_edge_edge(&m, 0.0, &toi);
 	expect_hit_at(hit, toi, 0.5);
 	/* Side by side without overlap in x: no contact. */
 	double c0[3] = {1.5, 1, 0}, c1[3] = {2.5, 1, 0};
 	m = two_edges(a0, a1, c0, c1, move);
-	cr_expect_not(edge_edge(&m, 0.0, &toi));
+	cr_expect_not(hit_edge_edge(&m, 0.0, &toi));
 	/* Parallel and passing 0.1 above each other. */
 	double d0[3] = {0.5, 1, 0.1}, d1[3] = {1.5, 1, 0.1};
 	m = two_edges(a0, a1, d0, d1, move);
-	cr_expect_not(edge_edge(&m, 0.0, &toi));
+	cr_expect_not(hit_edge_edge(&m, 0.0, &toi));
 }
 
 Test(ccd_constructed, coplanar_motion)
@@ -573,16 +573,16 @@ Test(ccd_constructed, coplanar_motion)
 	/* The vertex slides inside the triangle's plane and enters it through the edge x = 0 at t = 0.5. */
 	double a[3] = {-1.0, 0.25, 0.0}, b[3] = {1.0, 0.25, 0.0}, toi;
 	plait_ccd_motion m = vertex_and_triangle(a, b);
-	bool hit = vertex_face(&m, 0.0, &toi);
+	bool hit = hit_vertex_face(&m, 0.0, &toi);
 	expect_hit_at(hit, toi, 0.5);
 	/* In the plane but passing beside the triangle. */
 	double c[3] = {-1.0, 2.0, 0.0}, d[3] = {1.0, 2.0, 0.0};
 	m = vertex_and_triangle(c, d);
-	cr_expect_not(vertex_face(&m, 0.0, &toi));
+	cr_expect_not(hit_vertex_face(&m, 0.0, &toi));
 	/* Two edges sliding in the plane z = 0 until an endpoint touches the other edge at t = 0.5. */
 	double a0[3] = {0, 0, 0}, a1[3] = {0, 2, 0}, b0[3] = {1, 1, 0}, b1[3] = {3, 1, 0}, move[3] = {-2, 0, 0};
 	plait_ccd_motion e = two_edges(a0, a1, b0, b1, move);
-	hit = edge_edge(&e, 0.0, &toi);
+	hit = hit_edge_edge(&e, 0.0, &toi);
 	expect_hit_at(hit, toi, 0.5);
 }
 
@@ -591,18 +591,18 @@ Test(ccd_constructed, vertex_exactly_on_an_edge)
 	/* At rest on the triangle's edge from the start: contact at t = 0. */
 	double a[3] = {0.5, 0.0, 0.0}, toi = -1.0;
 	plait_ccd_motion m = vertex_and_triangle(a, a);
-	cr_expect(vertex_face(&m, 0.0, &toi));
+	cr_expect(hit_vertex_face(&m, 0.0, &toi));
 	cr_expect_eq(toi, 0.0);
 	/* An edge endpoint resting on the other edge's interior. */
 	double a0[3] = {0, 0, 0}, a1[3] = {1, 0, 0}, b0[3] = {0.5, 0, 0}, b1[3] = {0.5, 1, 0},
 	       still[3] = {0, 0, 0};
 	plait_ccd_motion e = two_edges(a0, a1, b0, b1, still);
-	cr_expect(edge_edge(&e, 0.0, &toi));
+	cr_expect(hit_edge_edge(&e, 0.0, &toi));
 	cr_expect_eq(toi, 0.0);
 	/* Sharing a vertex counts as touching at t = 0. */
 	double c0[3] = {1, 0, 0}, c1[3] = {1, 1, 0};
 	e = two_edges(a0, a1, c0, c1, still);
-	cr_expect(edge_edge(&e, 0.0, &toi));
+	cr_expect(hit_edge_edge(&e, 0.0, &toi));
 	cr_expect_eq(toi, 0.0);
 }
 
@@ -615,10 +615,10 @@ Test(ccd_constructed, tiny_and_huge_scales)
 		for (int j = 0; j < 3; j++) {
 			plait_ccd_motion crossing =
 			    transformed(vertex_and_triangle(a, b), scales[i], offsets[j] * scales[i]);
-			bool hit = vertex_face(&crossing, 0.0, &toi);
+			bool hit = hit_vertex_face(&crossing, 0.0, &toi);
 			expect_hit_at(hit, toi, 0.5);
 			plait_ccd_motion miss = transformed(vertex_and_triangle(c, d), scales[i], offsets[j] * scales[i]);
-			cr_expect_not(vertex_face(&miss, 0.0, &toi), "miss reported at scale %g offset %g", scales[i],
+			cr_expect_not(hit_vertex_face(&miss, 0.0, &toi), "miss reported at scale %g offset %g", scales[i],
 			              offsets[j]);
 		}
 	}
@@ -638,7 +638,7 @@ Test(ccd_constructed, fast_point_through_a_thin_triangle)
 		}
 	}
 	double contact = a[2] / (a[2] - b[2]);
-	bool hit = vertex_face(&m, 0.0, &toi);
+	bool hit = hit_vertex_face(&m, 0.0, &toi);
 	expect_hit_at(hit, toi, contact);
 	/* The float convenience wrapper agrees and rounds the time down. */
 	plait_ccd_motion_float f;
@@ -659,25 +659,25 @@ Test(ccd_constructed, minimum_distance)
 	/* Gliding over the triangle at height d / 2 (from outside to outside): within d. */
 	double a[3] = {-1.0, 0.25, 0.5 * d}, b[3] = {2.0, 0.25, 0.5 * d};
 	plait_ccd_motion m = vertex_and_triangle(a, b);
-	cr_expect(vertex_face(&m, d, &toi));
+	cr_expect(hit_vertex_face(&m, d, &toi));
 	cr_expect_leq(toi, (1.0 - 0.5 * d) / 3.0 + 1e-12, "toi %g after reaching the triangle", toi);
-	cr_expect_not(vertex_face(&m, 0.0, &toi), "touching reported at height d / 2");
+	cr_expect_not(hit_vertex_face(&m, 0.0, &toi), "touching reported at height d / 2");
 	/* At height 2 d: no hit. */
 	double c[3] = {-1.0, 0.25, 2.0 * d}, e[3] = {2.0, 0.25, 2.0 * d};
 	m = vertex_and_triangle(c, e);
-	cr_expect_not(vertex_face(&m, d, &toi));
+	cr_expect_not(hit_vertex_face(&m, d, &toi));
 	/* Falling onto the triangle: distance d is reached at t = (1 - d) / 2. */
 	double f[3] = {0.25, 0.25, 1.0}, g[3] = {0.25, 0.25, -1.0};
 	m = vertex_and_triangle(f, g);
-	bool hit = vertex_face(&m, d, &toi);
+	bool hit = hit_vertex_face(&m, d, &toi);
 	expect_hit_at(hit, toi, 0.5 * (1.0 - d));
 	/* Edges passing d / 2 apart hit with thickness d, and 2 d apart do not. */
 	double a0[3] = {0, 0, 0}, a1[3] = {1, 0, 0}, b0[3] = {0.5, -1, 0.5 * d}, b1[3] = {0.5, 1, 0.5 * d};
 	double move[3] = {0, 0, 0}, far0[3] = {0.5, -1, 2.0 * d}, far1[3] = {0.5, 1, 2.0 * d};
 	plait_ccd_motion edges = two_edges(a0, a1, b0, b1, move);
-	cr_expect(edge_edge(&edges, d, &toi));
+	cr_expect(hit_edge_edge(&edges, d, &toi));
 	edges = two_edges(a0, a1, far0, far1, move);
-	cr_expect_not(edge_edge(&edges, d, &toi));
+	cr_expect_not(hit_edge_edge(&edges, d, &toi));
 }
 
 Test(ccd_constructed, max_time_limits_the_interval)
@@ -694,7 +694,7 @@ Test(ccd_constructed, invalid_input_is_a_hit_at_zero)
 {
 	double a[3] = {NAN, 0.25, 1.0}, b[3] = {0.25, 0.25, -1.0}, toi = -1.0;
 	plait_ccd_motion m = vertex_and_triangle(a, b);
-	cr_expect(vertex_face(&m, 0.0, &toi));
+	cr_expect(hit_vertex_face(&m, 0.0, &toi));
 	cr_expect_eq(toi, 0.0);
 }
 
@@ -816,8 +816,9 @@ Test(ccd_random, thickness_never_missed_by_samples)
 		for (int kind = 0; kind < 2; kind++) {
 			bool is_vertex_face = kind == 0;
 			double d = distances[n % 3], toi, toi_touch;
-			bool hit = is_vertex_face ? vertex_face(&m, d, &toi) : edge_edge(&m, d, &toi);
-			bool touch = is_vertex_face ? vertex_face(&m, 0.0, &toi_touch) : edge_edge(&m, 0.0, &toi_touch);
+			bool hit = is_vertex_face ? hit_vertex_face(&m, d, &toi) : hit_edge_edge(&m, d, &toi);
+			bool touch =
+			    is_vertex_face ? hit_vertex_face(&m, 0.0, &toi_touch) : hit_edge_edge(&m, 0.0, &toi_touch);
 			queries++;
 			cr_expect(!touch || hit, "query %d: touching but not within %g", n, d);
 			for (int i = 0; i <= samples; i++) {
