@@ -88,7 +88,9 @@ plait_result plait_schedule_build(plait_schedule *schedule, const plait_allocato
 				scratch[count++] = (scheduled_event){j + 1, n, kinds[k].order, k};
 			}
 		}
-		qsort(scratch, (size_t)count, sizeof *scratch, compare_events);
+		if (count > 1) {
+			qsort(scratch, (size_t)count, sizeof *scratch, compare_events);
+		}
 		for (int e = 0; e < count; ++e) {
 			schedule->events[written++] = scratch[e].kind;
 		}
