@@ -136,6 +136,30 @@ bool plait_shape_sweep(const plait_shape *shape, vec3 p0, vec3 p1, float radius,
 		*toi = d0 / (d0 - d1);
 		return true;
 	}
+	if (shape->type == PLAIT_SHAPE_SPHERE) {
+		/* Exact for a sphere: |p0 + t d - c| = R is a quadratic in t. */
+		vec3 m = v3_sub(p0, shape->center);
+		float reach = shape->radius + radius;
+		float c = v3_dot(m, m) - reach * reach;
+		if (c <= 0.0f) {
+			*toi = 0.0f;
+			return true;
+		}
+		float a = v3_dot(motion, motion), b = v3_dot(m, motion);
+		if (a <= 0.0f || b >= 0.0f) {
+			return false;
+		}
+		float discriminant = b * b - a * c;
+		if (discriminant < 0.0f) {
+			return false;
+		}
+		float t_hit = (-b - sqrtf(discriminant)) / a;
+		if (t_hit > 1.0f) {
+			return false;
+		}
+		*toi = t_hit > 0.0f ? t_hit : 0.0f;
+		return true;
+	}
 	for (int step = 0; step < 64; ++step) {
 		vec3 p = v3_mul_add(p0, t, motion);
 		float gap = plait_shape_distance(shape, p, &normal) - radius;

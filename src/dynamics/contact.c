@@ -107,9 +107,39 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 	float inverse_scale = 1.0f / r1->scale;
 	float inverse_h = 1.0f / sim->substep_time;
 	int contacts = 0;
+	/* Cull with the collider's world box over the substep (unbounded for planes), grown by the
+	 * thickest particle: most particles never reach the transforms and the sweep. */
+	vec3 lower0, upper0;
+	bool bounded = plait_shape_bounds(&c->shape, &lower0, &upper0);
+	vec3 world_lower = {0}, world_upper = {0};
+	if (bounded) {
+		float grow = c->thickness;
+		for (int i = 0; i < p->count; ++i) {
+			grow = plait_maxf(grow, p->radius[i] + c->thickness);
+		}
+		world_lower = v3(INFINITY, INFINITY, INFINITY);
+		world_upper = v3(-INFINITY, -INFINITY, -INFINITY);
+		for (int corner = 0; corner < 8; ++corner) {
+			vec3 q = {corner & 1 ? upper0.x : lower0.x, corner & 2 ? upper0.y : lower0.y,
+			          corner & 4 ? upper0.z : lower0.z};
+			vec3 a = plait_rigid_apply(r0, q), b = plait_rigid_apply(r1, q);
+			world_lower = v3_min(world_lower, v3_min(a, b));
+			world_upper = v3_max(world_upper, v3_max(a, b));
+		}
+		world_lower = v3_sub(world_lower, v3(grow, grow, grow));
+		world_upper = v3_add(world_upper, v3(grow, grow, grow));
+	}
 	for (int i = 0; i < p->count; ++i) {
 		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->w[i] == 0.0f) {
 			continue;
+		}
+		if (bounded) {
+			vec3 a = p->x_prev[i], b = p->x[i];
+			if (plait_maxf(a.x, b.x) < world_lower.x || plait_minf(a.x, b.x) > world_upper.x ||
+			    plait_maxf(a.y, b.y) < world_lower.y || plait_minf(a.y, b.y) > world_upper.y ||
+			    plait_maxf(a.z, b.z) < world_lower.z || plait_minf(a.z, b.z) > world_upper.z) {
+				continue;
+			}
 		}
 		const plait_material *mat = &sim->materials[p->material[i]];
 		/* Everything in the collider's own space: there the collider stands still and the
