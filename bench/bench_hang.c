@@ -15,8 +15,8 @@
  * |length / rest - 1| of the structural edges at the last frame (max, p99, mean), and bytes of
  * library memory per vertex.
  *
- * usage: bench_hang [N ...] [--material default|rigid|both] [--runs R] [--frames F]
- *                   [--iterations I] [--substeps S]
+ * usage: bench_hang [N ...] [--material default|rigid|both] [--tethers none|euclidean|geodesic]
+ *                   [--runs R] [--frames F] [--iterations I] [--substeps S]
  */
 #include <math.h>
 #include <stdio.h>
@@ -30,6 +30,7 @@
 typedef struct hang_options {
 	int frames, runs, iterations, substeps;
 	bool rigid;
+	plait_tether_mode tethers;
 } hang_options;
 
 static double now_seconds(void)
@@ -126,6 +127,7 @@ static hang_result run_hang(int n, const hang_options *options)
 		cloth.iterations = options->iterations;
 	}
 	cloth.surface.thickness = 0.0f;
+	cloth.tethers = options->tethers;
 	cloth.pins = pins;
 	cloth.pin_count = 2;
 	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
@@ -192,7 +194,7 @@ static hang_result run_hang(int n, const hang_options *options)
 
 int main(int argc, char **argv)
 {
-	hang_options options = {300, 3, 20, 0, false};
+	hang_options options = {300, 3, 20, 0, false, PLAIT_TETHER_NONE};
 	int materials = 2; /* bit 0: default, bit 1: rigid */
 	int sizes[16], size_count = 0;
 	for (int a = 1; a < argc; ++a) {
@@ -205,13 +207,18 @@ int main(int argc, char **argv)
 		} else if (strcmp(argv[a], "--material") == 0 && a + 1 < argc) {
 			++a;
 			materials = strcmp(argv[a], "default") == 0 ? 1 : strcmp(argv[a], "both") == 0 ? 3 : 2;
+		} else if (strcmp(argv[a], "--tethers") == 0 && a + 1 < argc) {
+			++a;
+			options.tethers = strcmp(argv[a], "geodesic") == 0    ? PLAIT_TETHER_GEODESIC
+			                  : strcmp(argv[a], "euclidean") == 0 ? PLAIT_TETHER_EUCLIDEAN
+			                                                      : PLAIT_TETHER_NONE;
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
 			options.substeps = atoi(argv[++a]);
 		} else if (size_count < 16 && atoi(argv[a]) > 1) {
 			sizes[size_count++] = atoi(argv[a]);
 		} else {
-			fprintf(stderr, "usage: bench_hang [N ...] [--material default|rigid|both] [--runs R] [--frames F] "
-			                "[--iterations I] [--substeps S]\n");
+			fprintf(stderr, "usage: bench_hang [N ...] [--material default|rigid|both] [--tethers "
+			                "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S]\n");
 			return 2;
 		}
 	}
@@ -237,9 +244,11 @@ int main(int argc, char **argv)
 				times[r] = last.ms_per_frame;
 			}
 			qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
-			printf("scene=hang-%d material=%s threads=1 frames=%d ms_per_frame=%.3f strain_max=%.4f "
+			const char *tether_names[3] = {"none", "euclidean", "geodesic"};
+			printf("scene=hang-%d material=%s tethers=%s threads=1 frames=%d ms_per_frame=%.3f strain_max=%.4f "
 			       "strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
-			       sizes[s], options.rigid ? "rigid" : "default", options.frames, times[runs / 2], last.strain_max,
+			       sizes[s], options.rigid ? "rigid" : "default", tether_names[options.tethers], options.frames,
+			       times[runs / 2], last.strain_max,
 			       last.strain_p99, last.strain_mean, last.bytes_per_vertex, last.nonfinite);
 			fflush(stdout);
 		}

@@ -433,3 +433,25 @@ Test(scene_load, docs_list_every_key_with_the_api_default)
 		}
 	}
 }
+
+Test(scene_load, tethers_are_read_and_checked)
+{
+	plait_scene scene;
+	load("{\"objects\": [{\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [4, 4]},"
+	     " \"pins\": [0, 4], \"tethers\": \"geodesic\", \"tether_scale\": 1.05}]}",
+	     &scene);
+	cr_assert_eq(scene.objects[0].cloth.tethers, PLAIT_TETHER_GEODESIC);
+	cr_assert_float_eq(scene.objects[0].cloth.tether_scale, 1.05f, 1e-6f);
+	plait_world_id world;
+	plait_tool_error error;
+	cr_assert(plait_scene_create_world(&scene, &world, &error), "%s", error.message);
+	plait_destroy_world(world);
+	plait_scene_free(&scene);
+
+	plait_scene bad;
+	cr_assert_not(plait_scene_load_string("{\"objects\": [{\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], "
+	                                      "\"resolution\": [2, 2]}, \"tethers\": \"geodesik\"}]}",
+	                                      "scene.json", DATA_DIR, &bad, &error));
+	cr_assert(strstr(error.message, "objects[0].tethers") != NULL, "%s", error.message);
+	cr_assert(strstr(error.message, "geodesic") != NULL, "%s", error.message);
+}

@@ -167,6 +167,15 @@ typedef struct plait_mesh_def {
 	const int *face_indices;
 } plait_mesh_def;
 
+/* Tethers (long-range attachments, seed 004): each free vertex of a cloth is tied to its
+ * nearest pinned vertex and may never get farther from it than its rest distance times
+ * tether_scale. They stop a hanging cloth from stretching when iterations are few. */
+typedef enum plait_tether_mode {
+	PLAIT_TETHER_NONE = 0,
+	PLAIT_TETHER_EUCLIDEAN, /* nearest pin and distance in a straight line in the rest shape */
+	PLAIT_TETHER_GEODESIC,  /* nearest pin and distance along the mesh's edges */
+} plait_tether_mode;
+
 typedef struct plait_cloth_def {
 	const char *name;
 	plait_mesh_def mesh;
@@ -187,6 +196,9 @@ typedef struct plait_cloth_def {
 	float damp;                   /* velocity damping rate, 1/s, 0..100 (0) */
 	int iterations; /* stretch iterations per frame; 0 = from the stretch and compression
 	                 * resistances (0). Lets a stiff material run with few iterations. */
+	plait_tether_mode tethers;  /* (PLAIT_TETHER_NONE); built from the pins given here */
+	float tether_scale;         /* allowed distance / rest distance, 1..10 (1) */
+	float tether_stiffness;     /* share of a tether's excess removed per pass, 0..1 (1) */
 	plait_surface_def surface;
 	const int *pins; /* vertex indices held at their start position (targets settable later) */
 	int pin_count;

@@ -308,6 +308,28 @@ void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particle
 	}
 }
 
+void plait_solve_tethers(plait_tether_block *block, plait_particles *particles)
+{
+	vec3 *x = particles->x;
+	const float *w = particles->w;
+	for (int c = 0; c < block->count; ++c) {
+		int i = block->pair[c][0], anchor = block->pair[c][1];
+		float w_sum = w[i] + w[anchor];
+		if (w_sum == 0.0f) {
+			continue;
+		}
+		vec3 d = v3_sub(x[i], x[anchor]);
+		float length = sqrtf(v3_length_sq(d));
+		float excess = length - block->length[c];
+		if (excess <= 0.0f) {
+			continue;
+		}
+		vec3 correction = v3_scale(d, block->stiffness[c] * excess / (length * w_sum));
+		x[i] = v3_mul_add(x[i], -w[i], correction);
+		x[anchor] = v3_mul_add(x[anchor], w[anchor], correction);
+	}
+}
+
 float plait_distance_max_strain(const plait_distance_block *block, const plait_particles *particles)
 {
 	float worst = 0.0f;

@@ -92,6 +92,14 @@ typedef struct plait_rod_bend_block {
 	float *lambda;
 } plait_rod_bend_block;
 
+/* Tethers: particle pair[c][0] stays within length[c] of its anchor pair[c][1]. */
+typedef struct plait_tether_block {
+	int count, capacity;
+	int (*pair)[2];
+	float *length;
+	float *stiffness;
+} plait_tether_block;
+
 /* Cloth triangles that feel the air. weight[k] is the area (scene units^2) the triangle lends
  * corner k, chosen so that every vertex's total matches the area its mass was computed from. */
 typedef struct plait_aero_block {
@@ -122,6 +130,7 @@ typedef enum plait_kind {
 	PLAIT_KIND_STRETCH = 0,
 	PLAIT_KIND_SHEAR,
 	PLAIT_KIND_BEND,
+	PLAIT_KIND_TETHER,
 	PLAIT_KIND_COLLISION,
 	PLAIT_KIND_COUNT
 } plait_kind;
@@ -145,6 +154,7 @@ typedef struct plait_sim {
 	plait_distance_block stretch, shear;
 	plait_bend_block bend;
 	plait_rod_bend_block rod_bend;
+	plait_tether_block tether;
 	plait_aero_block aero;
 	int collider_count, collider_capacity;
 	plait_collider *colliders;

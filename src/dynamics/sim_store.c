@@ -73,6 +73,9 @@ void plait_sim_destroy(plait_sim *sim)
 	FREE_FIELD(sim->rod_bend, rest);
 	FREE_FIELD(sim->rod_bend, compliance);
 	FREE_FIELD(sim->rod_bend, lambda);
+	FREE_FIELD(sim->tether, pair);
+	FREE_FIELD(sim->tether, length);
+	FREE_FIELD(sim->tether, stiffness);
 	FREE_FIELD(sim->aero, triangle);
 	FREE_FIELD(sim->aero, weight);
 	FREE_FIELD(sim->aero, material);
@@ -173,6 +176,24 @@ bool plait_sim_reserve_rod_bend(plait_sim *sim, int count)
 	          grow_array(a, (void **)&b->rest, sizeof(float), b->count, capacity) &&
 	          grow_array(a, (void **)&b->compliance, sizeof(float), b->count, capacity) &&
 	          grow_array(a, (void **)&b->lambda, sizeof(float), b->count, capacity);
+	if (ok) {
+		b->capacity = capacity;
+	}
+	return ok;
+}
+
+bool plait_sim_reserve_tethers(plait_sim *sim, int count)
+{
+	plait_tether_block *b = &sim->tether;
+	int needed = b->count + count;
+	if (needed <= b->capacity) {
+		return true;
+	}
+	int capacity = next_capacity(b->capacity, needed);
+	const plait_allocator *a = &sim->allocator;
+	bool ok = grow_array(a, (void **)&b->pair, sizeof *b->pair, b->count, capacity) &&
+	          grow_array(a, (void **)&b->length, sizeof(float), b->count, capacity) &&
+	          grow_array(a, (void **)&b->stiffness, sizeof(float), b->count, capacity);
 	if (ok) {
 		b->capacity = capacity;
 	}
@@ -348,6 +369,21 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		++rod_kept;
 	}
 	rod->count = rod_kept;
+
+	plait_tether_block *tether = &sim->tether;
+	int tether_kept = 0;
+	for (int c = 0; c < tether->count; ++c) {
+		int i = remap[tether->pair[c][0]], anchor = remap[tether->pair[c][1]];
+		if (i < 0 || anchor < 0) {
+			continue;
+		}
+		tether->pair[tether_kept][0] = i;
+		tether->pair[tether_kept][1] = anchor;
+		tether->length[tether_kept] = tether->length[c];
+		tether->stiffness[tether_kept] = tether->stiffness[c];
+		++tether_kept;
+	}
+	tether->count = tether_kept;
 
 	plait_aero_block *aero = &sim->aero;
 	int aero_kept = 0;

@@ -14,6 +14,7 @@ bool plait_sim_reserve_distance(plait_sim *sim, plait_distance_block *block, int
 bool plait_sim_reserve_bend(plait_sim *sim, int count);
 bool plait_sim_reserve_rod_bend(plait_sim *sim, int count);
 bool plait_sim_reserve_aero(plait_sim *sim, int count);
+bool plait_sim_reserve_tethers(plait_sim *sim, int count);
 bool plait_sim_reserve_materials(plait_sim *sim, int count);
 bool plait_sim_reserve_colliders(plait_sim *sim, int count);
 

@@ -7,10 +7,12 @@
 #include "dynamics/constraints.h"
 #include "dynamics/contact.h"
 
-const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "collision"};
+const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "tether", "collision"};
 
-/* Order of each kind within a position: stretch first, collisions last (paper §6, Fig. 10). */
-static const int kind_order[PLAIT_KIND_COUNT] = {10, 20, 30, 100};
+/* Order of each kind within a position: stretch first, collisions last (paper §6, Fig. 10).
+ * Tethers come after the deformation kinds so that, collisions aside, their limit holds at
+ * the end of every substep. */
+static const int kind_order[PLAIT_KIND_COUNT] = {10, 20, 30, 50, 100};
 
 plait_result plait_sim_update_schedule(plait_sim *sim, plait_error *error)
 {
@@ -100,6 +102,10 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared);
 		plait_solve_rod_bend(&sim->rod_bend, &sim->particles, inverse_h_squared);
 		sim->constraint_solves += sim->bend.count + sim->rod_bend.count;
+		break;
+	case PLAIT_KIND_TETHER:
+		plait_solve_tethers(&sim->tether, &sim->particles);
+		sim->constraint_solves += sim->tether.count;
 		break;
 	case PLAIT_KIND_COLLISION:
 		plait_collide(sim);

@@ -19,6 +19,7 @@
 #include "core/error.h"
 #include "dynamics/constraints.h"
 #include "dynamics/sim_store.h"
+#include "world/tethers.h"
 #include "world/world.h"
 
 #define STRETCH_STIFFNESS_PER_RESISTANCE 100.0f /* N/m */
@@ -172,8 +173,14 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
 	    check_range(error, label, "iterations", (float)def->iterations, 0.0f, (float)PLAIT_MAX_IMPORTANCE) !=
 	        PLAIT_OK ||
+	    check_range(error, label, "tether_scale", def->tether_scale, 1.0f, 10.0f) != PLAIT_OK ||
+	    check_range(error, label, "tether_stiffness", def->tether_stiffness, 0.0f, 1.0f) != PLAIT_OK ||
 	    check_surface(error, label, &def->surface) != PLAIT_OK ||
 	    check_pins(error, label, def->pins, def->pin_count, mesh->vertex_count) != PLAIT_OK) {
+		return id;
+	}
+	if (def->tethers < PLAIT_TETHER_NONE || def->tethers > PLAIT_TETHER_GEODESIC) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown tether mode %d", label, (int)def->tethers);
 		return id;
 	}
 	for (int i = 0; def->vertex_masses != NULL && i < mesh->vertex_count; ++i) {
@@ -217,7 +224,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	bool ok = polygon_area && triangle_area && vertex_area && plait_sim_reserve_particles(sim, vertex_count) &&
 	          plait_sim_reserve_materials(sim, 1) && plait_sim_reserve_distance(sim, &sim->stretch, topology->edge_count) &&
 	          plait_sim_reserve_distance(sim, &sim->shear, 2 * quad_count) && plait_sim_reserve_bend(sim, bend_count) &&
-	          plait_sim_reserve_aero(sim, topology->triangle_count);
+	          plait_sim_reserve_aero(sim, topology->triangle_count) &&
+	          (def->tethers == PLAIT_TETHER_NONE || plait_sim_reserve_tethers(sim, vertex_count));
 	if (!ok) {
 		plait_free(a, polygon_area);
 		plait_free(a, triangle_area);
@@ -394,6 +402,9 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	plait_free(a, polygon_area);
 	plait_free(a, triangle_area);
 	plait_free(a, vertex_area);
+	/* Should the tethers' scratch memory run out, the cloth still works, untethered. */
+	(void)plait_build_tethers(sim, topology, x, first, def->pins, def->pin_count, def->tethers, def->tether_scale,
+	                          def->tether_stiffness);
 	/* Out of memory here only loses speed, never correctness: the order stays as built. */
 	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
 	plait_sim_batch_distance(sim, &sim->shear, first_shear);
@@ -405,6 +416,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	                 : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
 	object->importance[PLAIT_KIND_SHEAR] = resistance_importance(def->shear_resistance);
 	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
+	object->importance[PLAIT_KIND_TETHER] = 1; /* cheap and decisive: once per substep */
 	plait_world_update_kinds(world);
 	return id;
 }

@@ -27,6 +27,8 @@ plait_cloth_def plait_default_cloth_def(void)
 	def.drag = 0.05f;
 	def.tangential_drag = 0.01f;
 	def.lift = 0.05f;
+	def.tether_scale = 1.0f;
+	def.tether_stiffness = 1.0f;
 	def.surface = default_surface(0.01f);
 	return def;
 }

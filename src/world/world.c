@@ -270,6 +270,7 @@ void plait_world_update_kinds(plait_world *world)
 	sim->kind_active[PLAIT_KIND_STRETCH] = sim->stretch.count > 0;
 	sim->kind_active[PLAIT_KIND_SHEAR] = sim->shear.count > 0;
 	sim->kind_active[PLAIT_KIND_BEND] = sim->bend.count + sim->rod_bend.count > 0;
+	sim->kind_active[PLAIT_KIND_TETHER] = sim->tether.count > 0;
 	bool any_collider = false;
 	int colliding_objects = 0;
 	bool self_pairs = false;

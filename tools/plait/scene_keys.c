@@ -85,6 +85,9 @@ static const plait_scene_key plait_cloth_keys[] = {
     PLAIT_FLOAT("lift", PLAIT_BETWEEN(0, 1e6), plait_cloth_def, lift),
     PLAIT_FLOAT("damp", PLAIT_BETWEEN(0, 100), plait_cloth_def, damp),
     PLAIT_INT("iterations", PLAIT_BETWEEN(0, 1000), plait_cloth_def, iterations),
+    PLAIT_SPECIAL("tethers", false),
+    PLAIT_FLOAT("tether_scale", PLAIT_BETWEEN(1, 10), plait_cloth_def, tether_scale),
+    PLAIT_FLOAT("tether_stiffness", PLAIT_BETWEEN(0, 1), plait_cloth_def, tether_stiffness),
 };
 
 static const plait_scene_key plait_grid_keys[] = {

@@ -215,6 +215,16 @@ bool plait_scene_parse_cloth(plait_scene_loader *loader, const json_t *json, pla
 	if (!ok)
 		return false;
 	plait_reader_pop(r, old);
+	const json_t *tethers = json_object_get(json, "tethers");
+	if (tethers != NULL) {
+		static const char *const modes[] = {"none", "euclidean", "geodesic"};
+		size_t at = plait_reader_push_key(r, "tethers");
+		int mode;
+		if (!plait_reader_choice(r, tethers, modes, 3, &mode))
+			return false;
+		object->cloth.tethers = (plait_tether_mode)mode;
+		plait_reader_pop(r, at);
+	}
 	return plait_parse_vertex_extras(r, json, object);
 }
 

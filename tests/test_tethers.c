@@ -1,0 +1,126 @@
+/* Tethers (long-range attachments): no vertex ever gets farther from its anchor than the
+ * tether length times scale, and they cut the stretch of a hanging cloth. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "test_support.h"
+#include <string.h>
+
+static float v3len(plait_vec3 a, plait_vec3 b)
+{
+	float dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+	return sqrtf(dx * dx + dy * dy + dz * dz);
+}
+
+/* A heavy cloth hanging from two corners, solved with few iterations: without tethers it
+ * stretches a lot; returns the largest distance ratio |x_v - x_pin| / rest distance to the
+ * nearest pin over all frames, and the largest stretch of a structural edge at the end. */
+static void hang(plait_tether_mode mode, float scale, double *worst_ratio, double *max_stretch)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	int n = 20;
+	test_grid grid = test_grid_make(n, n, 1.0f, 1.0f);
+	plait_vec3 *rest = malloc(sizeof *rest * (size_t)grid.vertex_count);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		rest[i] = grid.positions[i];
+	}
+	float *masses = malloc(sizeof(float) * (size_t)grid.vertex_count);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		masses[i] = 1.0f;
+	}
+	int pins[2] = {0, n};
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.vertex_masses = masses;
+	def.stretch_resistance = 10000.0f;
+	def.compression_resistance = 10000.0f;
+	def.iterations = 5;
+	def.pins = pins;
+	def.pin_count = 2;
+	def.tethers = mode;
+	def.tether_scale = scale;
+	plait_error error;
+	plait_object_id cloth = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	plait_vec3 *x = malloc(sizeof *x * (size_t)grid.vertex_count);
+	*worst_ratio = 0.0;
+	for (int frame = 0; frame < 72; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_object_get_positions(cloth, 0, grid.vertex_count, x, NULL);
+		for (int v = 0; v < grid.vertex_count; ++v) {
+			/* The nearest pin in the rest shape, in a straight line (the Euclidean tether's). */
+			int anchor = pins[0];
+			float d0 = v3len(rest[v], rest[pins[0]]), d1 = v3len(rest[v], rest[pins[1]]);
+			if (d1 < d0) {
+				anchor = pins[1];
+				d0 = d1;
+			}
+			if (d0 > 0.0f) {
+				*worst_ratio = fmax(*worst_ratio, v3len(x[v], x[anchor]) / d0);
+			}
+		}
+	}
+	/* Stretch of the structural edges (compression, where the cloth folds, left out). */
+	double worst = 0.0;
+	for (int j = 0; j <= n; ++j) {
+		for (int i = 0; i <= n; ++i) {
+			int a = j * (n + 1) + i;
+			if (i < n) {
+				worst = fmax(worst, v3len(x[a], x[a + 1]) * n - 1.0);
+			}
+			if (j < n) {
+				worst = fmax(worst, v3len(x[a], x[a + n + 1]) * n - 1.0);
+			}
+		}
+	}
+	*max_stretch = worst;
+	free(x);
+	free(rest);
+	free(masses);
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+}
+
+Test(tethers, no_vertex_exceeds_its_tether_length_times_scale)
+{
+	double ratio, strain;
+	hang(PLAIT_TETHER_EUCLIDEAN, 1.0f, &ratio, &strain);
+	cr_assert_leq(ratio, 1.0 + 1e-4, "a vertex reached %g times its tether length", ratio);
+	hang(PLAIT_TETHER_EUCLIDEAN, 1.1f, &ratio, &strain);
+	cr_assert_leq(ratio, 1.1 + 1e-4, "a vertex reached %g times its rest distance (scale 1.1)", ratio);
+	/* Geodesic tethers follow the mesh: on this flat grid at most the octile distance, 8.3%
+	 * above the straight one. */
+	hang(PLAIT_TETHER_GEODESIC, 1.0f, &ratio, &strain);
+	cr_assert_leq(ratio, 1.083 + 1e-4, "geodesic: %g", ratio);
+}
+
+Test(tethers, hold_a_heavy_hanging_cloth_to_its_rest_reach)
+{
+	double ratio_none, stretch_none, ratio_tethered, stretch_tethered;
+	hang(PLAIT_TETHER_NONE, 1.0f, &ratio_none, &stretch_none);
+	hang(PLAIT_TETHER_EUCLIDEAN, 1.0f, &ratio_tethered, &stretch_tethered);
+	cr_log_info("largest edge stretch without tethers %.4f, with %.4f; worst pin distance ratio %.3f vs %.3f",
+	            stretch_none, stretch_tethered, ratio_none, ratio_tethered);
+	cr_assert_gt(ratio_none, 1.5, "without tethers the cloth should overstretch (%g)", ratio_none);
+	cr_assert_leq(ratio_tethered, 1.0001);
+	cr_assert_lt(stretch_tethered, stretch_none);
+}
+
+Test(tethers, bad_parameters_are_rejected)
+{
+	plait_world_def wdef = plait_default_world_def();
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	test_grid grid = test_grid_make(2, 2, 1.0f, 1.0f);
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.tethers = PLAIT_TETHER_GEODESIC;
+	def.tether_scale = 0.5f;
+	plait_error error;
+	cr_assert(plait_object_id_is_null(plait_create_cloth(world, &def, &error)));
+	cr_assert(strstr(error.message, "tether_scale must be in 1..10") != NULL, "%s", error.message);
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+}
