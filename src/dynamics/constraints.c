@@ -28,63 +28,61 @@ static inline void project_distance(plait_distance_block *block, vec3 *x, const 
 
 #define LANES 8
 
-/* Projects one batch of at most LANES constraints that share no particle. The arithmetic runs
- * over fixed-size lane arrays, which the compiler turns into SIMD; since the constraints are
- * independent, the result is exactly that of projecting them one after another. Unused lanes
- * carry zero inverse masses and change nothing. */
+/* Projects one batch of at most LANES constraints that share no particle. Positions are
+ * gathered once into lane arrays, the arithmetic runs over whole lanes (the compiler turns it
+ * into SIMD), and the new positions are stored back without reading them again. Since the
+ * constraints are independent, the result is exactly that of projecting them one after
+ * another. Lanes past n carry zero inverse masses and change nothing; the block's arrays are
+ * padded by LANES entries so their parameters can be read whole. */
 static void project_distance_batch(plait_distance_block *block, vec3 *x, const float *w, int first, int n,
                                    float inverse_h_squared)
 {
-	float dx[LANES], dy[LANES], dz[LANES], wi[LANES], wj[LANES], rest[LANES], tension[LANES], compression[LANES],
-	    lambda[LANES], scale[LANES];
+	float xi[LANES], yi[LANES], zi[LANES], xj[LANES], yj[LANES], zj[LANES], wi[LANES], wj[LANES];
+	const int(*pair)[2] = (const int(*)[2])block->pair + first;
 	for (int lane = 0; lane < LANES; ++lane) {
-		if (lane < n) {
-			int c = first + lane;
-			int i = block->pair[c][0], j = block->pair[c][1];
-			dx[lane] = x[j].x - x[i].x;
-			dy[lane] = x[j].y - x[i].y;
-			dz[lane] = x[j].z - x[i].z;
-			wi[lane] = w[i];
-			wj[lane] = w[j];
-			rest[lane] = block->rest[c];
-			tension[lane] = block->compliance_tension[c];
-			compression[lane] = block->compliance_compression[c];
-			lambda[lane] = block->lambda[c];
-		} else {
-			dx[lane] = 1.0f;
-			dy[lane] = dz[lane] = 0.0f;
-			wi[lane] = wj[lane] = 0.0f;
-			rest[lane] = 1.0f;
-			tension[lane] = compression[lane] = lambda[lane] = 0.0f;
-		}
+		int i = pair[lane][0], j = pair[lane][1]; /* padding keeps lanes past n readable */
+		xi[lane] = x[i].x;
+		yi[lane] = x[i].y;
+		zi[lane] = x[i].z;
+		xj[lane] = x[j].x;
+		yj[lane] = x[j].y;
+		zj[lane] = x[j].z;
+		wi[lane] = lane < n ? w[i] : 0.0f;
+		wj[lane] = lane < n ? w[j] : 0.0f;
 	}
+	const float *rest = block->rest + first, *tension = block->compliance_tension + first;
+	const float *compression = block->compliance_compression + first;
+	float *lambda = block->lambda + first;
+	float lambda_out[LANES];
 	for (int lane = 0; lane < LANES; ++lane) {
+		float dx = xj[lane] - xi[lane], dy = yj[lane] - yi[lane], dz = zj[lane] - zi[lane];
 		float w_sum = wi[lane] + wj[lane];
-		float length = sqrtf(dx[lane] * dx[lane] + dy[lane] * dy[lane] + dz[lane] * dz[lane]);
+		float length = sqrtf(dx * dx + dy * dy + dz * dz);
 		length = length > 1e-12f ? length : 1e-12f;
 		float C = length - rest[lane];
 		/* Branch-free: the sign of C is unpredictable, and a negative compliance means "no
 		 * resistance this way". */
-		float alpha = C > 0.0f ? tension[lane] : compression[lane];
+		float tension_alpha = tension[lane], compression_alpha = compression[lane], lambda_in = lambda[lane];
+		float alpha = C > 0.0f ? tension_alpha : compression_alpha;
 		float active = (float)((alpha >= 0.0f) & (w_sum > 0.0f));
 		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
 		float denominator = (w_sum + alpha_tilde) * length;
 		denominator = w_sum > 0.0f ? denominator : 1.0f;
-		float s = active * (-C - alpha_tilde * lambda[lane]) / denominator;
-		lambda[lane] += s * length;
-		scale[lane] = s;
+		float s = active * (-C - alpha_tilde * lambda_in) / denominator;
+		lambda_out[lane] = lambda_in + s * length;
+		float si = wi[lane] * s, sj = wj[lane] * s;
+		xi[lane] -= si * dx;
+		yi[lane] -= si * dy;
+		zi[lane] -= si * dz;
+		xj[lane] += sj * dx;
+		yj[lane] += sj * dy;
+		zj[lane] += sj * dz;
 	}
 	for (int lane = 0; lane < n; ++lane) {
-		int c = first + lane;
-		int i = block->pair[c][0], j = block->pair[c][1];
-		block->lambda[c] = lambda[lane];
-		float si = wi[lane] * scale[lane], sj = wj[lane] * scale[lane];
-		x[i].x -= si * dx[lane];
-		x[i].y -= si * dy[lane];
-		x[i].z -= si * dz[lane];
-		x[j].x += sj * dx[lane];
-		x[j].y += sj * dy[lane];
-		x[j].z += sj * dz[lane];
+		int i = pair[lane][0], j = pair[lane][1];
+		lambda[lane] = lambda_out[lane];
+		x[i] = (vec3){xi[lane], yi[lane], zi[lane]};
+		x[j] = (vec3){xj[lane], yj[lane], zj[lane]};
 	}
 }
 
@@ -222,15 +220,19 @@ static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w,
 		lambda[lane] += dlambda;
 		step[lane] = dlambda;
 	}
+	for (int lane = 0; lane < LANES; ++lane) {
+		for (int k = 0; k < 4; ++k) {
+			float s = wq[k][lane] * step[lane];
+			px[k][lane] += s * gx[k][lane];
+			py[k][lane] += s * gy[k][lane];
+			pz[k][lane] += s * gz[k][lane];
+		}
+	}
 	for (int lane = 0; lane < n; ++lane) {
 		int c = first + lane;
 		block->lambda[c] = lambda[lane];
 		for (int k = 0; k < 4; ++k) {
-			int i = block->quad[c][k];
-			float s = wq[k][lane] * step[lane];
-			x[i].x += s * gx[k][lane];
-			x[i].y += s * gy[k][lane];
-			x[i].z += s * gz[k][lane];
+			x[block->quad[c][k]] = (vec3){px[k][lane], py[k][lane], pz[k][lane]};
 		}
 	}
 }

@@ -127,7 +127,8 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 
 bool plait_sim_reserve_distance(plait_sim *sim, plait_distance_block *b, int count)
 {
-	int needed = b->count + count;
+	/* Batches read whole lanes: keep 8 entries of padding past the last constraint. */
+	int needed = b->count + count + 8;
 	if (needed <= b->capacity) {
 		return true;
 	}
