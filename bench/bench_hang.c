@@ -217,8 +217,9 @@ int main(int argc, char **argv)
 		} else if (size_count < 16 && atoi(argv[a]) > 1) {
 			sizes[size_count++] = atoi(argv[a]);
 		} else {
-			fprintf(stderr, "usage: bench_hang [N ...] [--material default|rigid|both] [--tethers "
-			                "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S]\n");
+			fprintf(stderr,
+			        "usage: bench_hang [N ...] [--material default|rigid|both] [--tethers "
+			        "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S]\n");
 			return 2;
 		}
 	}
@@ -245,11 +246,12 @@ int main(int argc, char **argv)
 			}
 			qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
 			const char *tether_names[3] = {"none", "euclidean", "geodesic"};
-			printf("scene=hang-%d material=%s tethers=%s threads=1 frames=%d ms_per_frame=%.3f strain_max=%.4f "
-			       "strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
-			       sizes[s], options.rigid ? "rigid" : "default", tether_names[options.tethers], options.frames,
-			       times[runs / 2], last.strain_max,
-			       last.strain_p99, last.strain_mean, last.bytes_per_vertex, last.nonfinite);
+			printf(
+			    "scene=hang-%d material=%s tethers=%s threads=1 frames=%d ms_per_frame=%.3f strain_max=%.4f "
+			    "strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
+			    sizes[s], options.rigid ? "rigid" : "default", tether_names[options.tethers], options.frames,
+			    times[runs / 2], last.strain_max, last.strain_p99, last.strain_mean, last.bytes_per_vertex,
+			    last.nonfinite);
 			fflush(stdout);
 		}
 	}

@@ -117,7 +117,8 @@ int main(int argc, char **argv)
 		plait_destroy_world(world);
 	}
 	qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
-	printf("scene=pile particles=%d threads=1 frames=%d ms_per_frame=%.3f contacts=%d highest_m=%.3f penetrations=%d\n",
+	printf("scene=pile particles=%d threads=1 frames=%d ms_per_frame=%.3f contacts=%d highest_m=%.3f "
+	       "penetrations=%d\n",
 	       count, frames, times[runs / 2], last_contacts, (double)highest, penetrations);
 	free(positions);
 	return 0;

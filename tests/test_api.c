@@ -6,7 +6,7 @@
 
 #include "test_support.h"
 
-#define ASSERT_MESSAGE(error, text) \
+#define ASSERT_MESSAGE(error, text)                                                                          \
 	cr_assert(strstr((error).message, (text)) != NULL, "message \"%s\" lacks \"%s\"", (error).message, (text))
 
 Test(api, world_def_is_validated)
@@ -166,7 +166,8 @@ Test(api, positions_velocities_and_pins_round_trip)
 	plait_object_get_positions(id, 0, 1, out, NULL);
 	cr_assert_float_eq(out[0].x, 5.0f, 1e-5f);
 	plait_error error;
-	cr_assert_eq(plait_object_set_pin_target(id, 1, (plait_vec3){0, 0, 0}, &error), PLAIT_ERROR_INVALID_ARGUMENT);
+	cr_assert_eq(plait_object_set_pin_target(id, 1, (plait_vec3){0, 0, 0}, &error),
+	             PLAIT_ERROR_INVALID_ARGUMENT);
 	ASSERT_MESSAGE(error, "not pinned");
 	plait_destroy_world(world);
 }

@@ -21,7 +21,8 @@ static plait_world_id make_world(int substeps, float fps)
 	return world;
 }
 
-static plait_object_id add_particle(plait_world_id world, plait_vec3 x, plait_vec3 v, float mass, float radius)
+static plait_object_id add_particle(plait_world_id world, plait_vec3 x, plait_vec3 v, float mass,
+                                    float radius)
 {
 	plait_particles_def def = plait_default_particles_def();
 	def.positions = &x;
@@ -60,7 +61,8 @@ Test(physics, pendulum_period)
 {
 	plait_world_id world = make_world(10, 60.0f);
 	float length = 1.0f, amplitude = 0.05f; /* radians */
-	plait_vec3 positions[2] = {{0.0f, 0.0f, 0.0f}, {length * sinf(amplitude), -length * cosf(amplitude), 0.0f}};
+	plait_vec3 positions[2] = {{0.0f, 0.0f, 0.0f},
+	                           {length * sinf(amplitude), -length * cosf(amplitude), 0.0f}};
 	plait_curve_def def = plait_default_curve_def();
 	def.positions = positions;
 	def.vertex_count = 2;
@@ -251,8 +253,8 @@ Test(physics, particle_on_tilted_plane_slides_with_the_coulomb_acceleration)
 		double a = slide_acceleration(cases[k][0], cases[k][1], &moved);
 		double theta = cases[k][0] * M_PI / 180.0;
 		double expected = 9.81 * (sin(theta) - cases[k][1] * cos(theta));
-		cr_assert_leq(fabs(a - expected) / expected, 0.10, "theta %g mu %g: a = %g, expected %g", (double)cases[k][0],
-		              (double)cases[k][1], a, expected);
+		cr_assert_leq(fabs(a - expected) / expected, 0.10, "theta %g mu %g: a = %g, expected %g",
+		              (double)cases[k][0], (double)cases[k][1], a, expected);
 	}
 }
 

@@ -86,7 +86,8 @@ Test(schedule, substeps_30_give_30_of_each)
 
 Test(schedule, every_kind_runs_every_substep_and_collision_is_last)
 {
-	plait_kind_desc kinds[4] = {{"stretch", 10, 37}, {"shear", 20, 3}, {"bend", 30, 1}, {"collision", 100, 7}};
+	plait_kind_desc kinds[4] = {
+	    {"stretch", 10, 37}, {"shear", 20, 3}, {"bend", 30, 1}, {"collision", 100, 7}};
 	for (int substeps = 1; substeps <= 12; ++substeps) {
 		plait_schedule s;
 		cr_assert_eq(plait_schedule_build(&s, &heap, substeps, kinds, 4, NULL), PLAIT_OK);

@@ -38,7 +38,8 @@ Test(stability, random_parameters_never_go_non_finite, .timeout = 600)
 		wdef.gravity = (plait_vec3){uniform(&state, -5, 5), uniform(&state, -30, 0), uniform(&state, -5, 5)};
 		wdef.air_density = uniform(&state, 0.0f, 5.0f);
 		wdef.wind.speed = uniform(&state, 0.0f, 30.0f);
-		wdef.wind.direction = (plait_vec3){uniform(&state, -1, 1), uniform(&state, -1, 1), uniform(&state, -1, 1)};
+		wdef.wind.direction =
+		    (plait_vec3){uniform(&state, -1, 1), uniform(&state, -1, 1), uniform(&state, -1, 1)};
 		wdef.wind.noise = uniform(&state, 0.0f, 2.0f);
 		wdef.space_scale = next_random(&state) % 4 == 0 ? 0.01f : 1.0f;
 		wdef.time_scale = uniform(&state, 0.25f, 2.0f);
@@ -48,7 +49,8 @@ Test(stability, random_parameters_never_go_non_finite, .timeout = 600)
 		float unit = 1.0f / wdef.space_scale;
 
 		int n = 4 + (int)(next_random(&state) % 12);
-		test_grid grid = test_grid_make(n, n, unit * uniform(&state, 0.2f, 2.0f), unit * uniform(&state, 0.2f, 2.0f));
+		test_grid grid =
+		    test_grid_make(n, n, unit * uniform(&state, 0.2f, 2.0f), unit * uniform(&state, 0.2f, 2.0f));
 		for (int i = 0; i < grid.vertex_count; ++i) {
 			grid.positions[i].y = unit * 1.0f;
 		}
@@ -115,18 +117,21 @@ Test(stability, random_parameters_never_go_non_finite, .timeout = 600)
 		cr_assert(!plait_object_id_is_null(collider_id), "run %d: %s", run, error.message);
 
 		char description[512];
-		snprintf(description, sizeof description,
-		         "fps %g substeps %d collisions %d air %g wind %g noise %g scale %g time %g; cloth n %d density %g "
-		         "stretch %g compression %g shear %g bend %g iterations %d rest %g drag %g/%g lift %g damp %g "
-		         "thickness %g; rope mass %g stretch %g bend %g; particles r %g m %g; collider %d r %g",
-		         (double)wdef.fps, wdef.substeps, wdef.max_collision_iterations, (double)wdef.air_density,
-		         (double)wdef.wind.speed, (double)wdef.wind.noise, (double)wdef.space_scale, (double)wdef.time_scale, n,
-		         (double)cloth.density, (double)cloth.stretch_resistance, (double)cloth.compression_resistance,
-		         (double)cloth.shear_resistance, (double)cloth.bend_resistance, cloth.iterations,
-		         (double)cloth.rest_length_scale, (double)cloth.drag, (double)cloth.tangential_drag, (double)cloth.lift,
-		         (double)cloth.damp, (double)cloth.surface.thickness, (double)rope.mass, (double)rope.stretch_resistance,
-		         (double)rope.bend_resistance, (double)particles.radius, (double)particles.mass, (int)collider.shape,
-		         (double)collider.radius);
+		snprintf(
+		    description, sizeof description,
+		    "fps %g substeps %d collisions %d air %g wind %g noise %g scale %g time %g; cloth n %d density "
+		    "%g "
+		    "stretch %g compression %g shear %g bend %g iterations %d rest %g drag %g/%g lift %g damp %g "
+		    "thickness %g; rope mass %g stretch %g bend %g; particles r %g m %g; collider %d r %g",
+		    (double)wdef.fps, wdef.substeps, wdef.max_collision_iterations, (double)wdef.air_density,
+		    (double)wdef.wind.speed, (double)wdef.wind.noise, (double)wdef.space_scale,
+		    (double)wdef.time_scale, n, (double)cloth.density, (double)cloth.stretch_resistance,
+		    (double)cloth.compression_resistance, (double)cloth.shear_resistance,
+		    (double)cloth.bend_resistance, cloth.iterations, (double)cloth.rest_length_scale,
+		    (double)cloth.drag, (double)cloth.tangential_drag, (double)cloth.lift, (double)cloth.damp,
+		    (double)cloth.surface.thickness, (double)rope.mass, (double)rope.stretch_resistance,
+		    (double)rope.bend_resistance, (double)particles.radius, (double)particles.mass,
+		    (int)collider.shape, (double)collider.radius);
 		for (int frame = 0; frame < 24; ++frame) {
 			plait_transform t = plait_identity_transform();
 			t.translate.y = unit * 0.3f * sinf(0.3f * (float)frame);

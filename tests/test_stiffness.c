@@ -82,16 +82,16 @@ Test(stiffness, strain_does_not_depend_on_substeps_or_resolution, .timeout = 600
 {
 	double coarse3 = hanging_strain(32, 3), coarse12 = hanging_strain(32, 12);
 	double fine3 = hanging_strain(64, 3), fine12 = hanging_strain(64, 12);
-	cr_log_info("mean strain: 32x32 %.4f (3 substeps) %.4f (12); 64x64 %.4f (3) %.4f (12)", coarse3, coarse12, fine3,
-	            fine12);
+	cr_log_info("mean strain: 32x32 %.4f (3 substeps) %.4f (12); 64x64 %.4f (3) %.4f (12)", coarse3, coarse12,
+	            fine3, fine12);
 	/* The converged material stretches as the membrane model says: tension at height y is
 	 * rho g y, so the mean strain of a sheet of height L is rho g L / (2 k). */
 	double analytic = 0.2 * 9.81 * 1.0 / (2.0 * 20.0);
-	cr_assert_lt(fabs(coarse12 - analytic) / analytic, 0.20, "strain %g, membrane model %g", coarse12, analytic);
+	cr_assert_lt(fabs(coarse12 - analytic) / analytic, 0.20, "strain %g, membrane model %g", coarse12,
+	             analytic);
 	cr_assert_lt(fabs(fine12 - analytic) / analytic, 0.20, "strain %g, membrane model %g", fine12, analytic);
 	assert_close(coarse3, coarse12, "32x32, substeps 3 vs 12");
 	assert_close(fine3, fine12, "64x64, substeps 3 vs 12");
 	assert_close(coarse3, fine3, "3 substeps, 32x32 vs 64x64");
 	assert_close(coarse12, fine12, "12 substeps, 32x32 vs 64x64");
 }
-

@@ -56,7 +56,8 @@ Test(topology, bad_faces_are_rejected_with_a_message)
 	plait_topology t;
 	int sizes[1] = {3};
 	int out_of_range[3] = {0, 1, 7};
-	cr_assert_eq(plait_topology_build(&t, &heap, 3, sizes, 1, out_of_range, &error), PLAIT_ERROR_INVALID_MESH);
+	cr_assert_eq(plait_topology_build(&t, &heap, 3, sizes, 1, out_of_range, &error),
+	             PLAIT_ERROR_INVALID_MESH);
 	cr_assert(strstr(error.message, "vertex index 7") != NULL, "%s", error.message);
 	int repeated[3] = {0, 1, 1};
 	cr_assert_eq(plait_topology_build(&t, &heap, 3, sizes, 1, repeated, &error), PLAIT_ERROR_INVALID_MESH);

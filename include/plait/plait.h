@@ -34,7 +34,7 @@ typedef enum plait_result {
 	PLAIT_ERROR_INVALID_ID,       /* a world or object id that is stale or was never valid */
 	PLAIT_ERROR_INVALID_MESH,     /* bad index, non-finite coordinate, degenerate topology */
 	PLAIT_ERROR_OUT_OF_MEMORY,
-	PLAIT_ERROR_NONFINITE,        /* the simulation produced NaN or infinity */
+	PLAIT_ERROR_NONFINITE, /* the simulation produced NaN or infinity */
 } plait_result;
 
 #define PLAIT_ERROR_MESSAGE_SIZE 256
@@ -61,8 +61,14 @@ typedef struct plait_object_id {
 	uint16_t generation;
 } plait_object_id;
 
-static inline bool plait_world_id_is_null(plait_world_id id) { return id.world == NULL; }
-static inline bool plait_object_id_is_null(plait_object_id id) { return id.index1 == 0; }
+static inline bool plait_world_id_is_null(plait_world_id id)
+{
+	return id.world == NULL;
+}
+static inline bool plait_object_id_is_null(plait_object_id id)
+{
+	return id.index1 == 0;
+}
 
 /* ---- Hooks ---------------------------------------------------------------------------------- */
 
@@ -75,8 +81,8 @@ typedef void plait_free_fn(void *memory, void *user_context);
  * each range (or all at once) and finish_task waits for it. Results never depend on how the
  * ranges are scheduled. If enqueue_task is NULL everything runs on the calling thread. */
 typedef void plait_task_fn(int start_index, int end_index, int worker_index, void *task_context);
-typedef void *plait_enqueue_task_fn(plait_task_fn *task, int item_count, int min_range,
-                                    void *task_context, void *user_context);
+typedef void *plait_enqueue_task_fn(plait_task_fn *task, int item_count, int min_range, void *task_context,
+                                    void *user_context);
 typedef void plait_finish_task_fn(void *user_task, void *user_context);
 
 /* ---- World ---------------------------------------------------------------------------------- */
@@ -194,11 +200,11 @@ typedef struct plait_cloth_def {
 	float tangential_drag;        /* >= 0 (0.01) */
 	float lift;                   /* >= 0 (0.05) */
 	float damp;                   /* velocity damping rate, 1/s, 0..100 (0) */
-	int iterations; /* stretch iterations per frame; 0 = from the stretch and compression
-	                 * resistances (0). Lets a stiff material run with few iterations. */
-	plait_tether_mode tethers;  /* (PLAIT_TETHER_NONE); built from the pins given here */
-	float tether_scale;         /* allowed distance / rest distance, 1..10 (1) */
-	float tether_stiffness;     /* share of a tether's excess removed per pass, 0..1 (1) */
+	int iterations;               /* stretch iterations per frame; 0 = from the stretch and compression
+	                               * resistances (0). Lets a stiff material run with few iterations. */
+	plait_tether_mode tethers;    /* (PLAIT_TETHER_NONE); built from the pins given here */
+	float tether_scale;           /* allowed distance / rest distance, 1..10 (1) */
+	float tether_stiffness;       /* share of a tether's excess removed per pass, 0..1 (1) */
 	plait_surface_def surface;
 	const int *pins; /* vertex indices held at their start position (targets settable later) */
 	int pin_count;
@@ -227,10 +233,10 @@ typedef struct plait_particles_def {
 	const plait_vec3 *positions;
 	int count;
 	const plait_vec3 *velocities;
-	float mass;   /* kg per particle (1) */
-	float radius; /* scene units, > 0 (0.05) */
-	float drag;   /* linear air drag per particle, >= 0 (0) */
-	float damp;   /* 1/s (0) */
+	float mass;                /* kg per particle (1) */
+	float radius;              /* scene units, > 0 (0.05) */
+	float drag;                /* linear air drag per particle, >= 0 (0) */
+	float damp;                /* 1/s (0) */
 	plait_surface_def surface; /* thickness adds to radius */
 	bool self_collide;         /* particles of this object collide with each other (true) */
 } plait_particles_def;
@@ -254,13 +260,13 @@ typedef struct plait_transform {
 typedef struct plait_collider_def {
 	const char *name;
 	plait_shape_type shape;
-	plait_vec3 point, normal;      /* plane: a point on it and its normal (solid below) */
-	plait_vec3 center;             /* sphere, box */
-	float radius;                  /* sphere, capsule */
-	plait_vec3 a, b;               /* capsule segment ends */
-	plait_vec3 size;               /* box: full extents */
-	plait_vec3 rotation_deg;       /* box: orientation */
-	plait_transform transform;     /* initial keyframe transform (identity) */
+	plait_vec3 point, normal;  /* plane: a point on it and its normal (solid below) */
+	plait_vec3 center;         /* sphere, box */
+	float radius;              /* sphere, capsule */
+	plait_vec3 a, b;           /* capsule segment ends */
+	plait_vec3 size;           /* box: full extents */
+	plait_vec3 rotation_deg;   /* box: orientation */
+	plait_transform transform; /* initial keyframe transform (identity) */
 	plait_surface_def surface;
 } plait_collider_def;
 
@@ -306,7 +312,8 @@ plait_result plait_object_set_velocities(plait_object_id object, int first, int 
                                          const plait_vec3 *velocities, plait_error *error);
 
 /* Pins: a pinned vertex follows its target exactly, linearly interpolated over the next frame. */
-plait_result plait_object_pin_vertex(plait_object_id object, int vertex, plait_vec3 target, plait_error *error);
+plait_result plait_object_pin_vertex(plait_object_id object, int vertex, plait_vec3 target,
+                                     plait_error *error);
 plait_result plait_object_unpin_vertex(plait_object_id object, int vertex, plait_error *error);
 plait_result plait_object_set_pin_target(plait_object_id object, int vertex, plait_vec3 target,
                                          plait_error *error);

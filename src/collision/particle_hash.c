@@ -55,8 +55,9 @@ static bool reserve(void **array, int *capacity, int needed, size_t size, const 
 	return true;
 }
 
-bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator *allocator, const int *particles,
-                               const vec3 *lower, const vec3 *upper, int count, float cell_size)
+bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator *allocator,
+                               const int *particles, const vec3 *lower, const vec3 *upper, int count,
+                               float cell_size)
 {
 	hash->cell_size = cell_size;
 	float inverse = 1.0f / cell_size;
@@ -66,14 +67,17 @@ bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator 
 	int entry_count = 0;
 	for (int k = 0; k < count; ++k) {
 		plait_hash_range *r = &hash->ranges[k];
-		r->lower = (plait_hash_cell){cell_coordinate(lower[k].x, inverse), cell_coordinate(lower[k].y, inverse),
-		                             cell_coordinate(lower[k].z, inverse)};
-		r->upper = (plait_hash_cell){cell_coordinate(upper[k].x, inverse), cell_coordinate(upper[k].y, inverse),
-		                             cell_coordinate(upper[k].z, inverse)};
+		r->lower =
+		    (plait_hash_cell){cell_coordinate(lower[k].x, inverse), cell_coordinate(lower[k].y, inverse),
+		                      cell_coordinate(lower[k].z, inverse)};
+		r->upper =
+		    (plait_hash_cell){cell_coordinate(upper[k].x, inverse), cell_coordinate(upper[k].y, inverse),
+		                      cell_coordinate(upper[k].z, inverse)};
 		clamp_axis(&r->lower.x, &r->upper.x);
 		clamp_axis(&r->lower.y, &r->upper.y);
 		clamp_axis(&r->lower.z, &r->upper.z);
-		entry_count += (r->upper.x - r->lower.x + 1) * (r->upper.y - r->lower.y + 1) * (r->upper.z - r->lower.z + 1);
+		entry_count +=
+		    (r->upper.x - r->lower.x + 1) * (r->upper.y - r->lower.y + 1) * (r->upper.z - r->lower.z + 1);
 	}
 	int table_size = 64;
 	while (table_size < 2 * entry_count) {
@@ -87,8 +91,10 @@ bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator 
 			return false;
 		}
 	}
-	if (!reserve((void **)&hash->entries, &hash->entry_capacity, entry_count, sizeof *hash->entries, allocator) ||
-	    !reserve((void **)&hash->scratch, &hash->scratch_capacity, entry_count, sizeof *hash->scratch, allocator)) {
+	if (!reserve((void **)&hash->entries, &hash->entry_capacity, entry_count, sizeof *hash->entries,
+	             allocator) ||
+	    !reserve((void **)&hash->scratch, &hash->scratch_capacity, entry_count, sizeof *hash->scratch,
+	             allocator)) {
 		return false;
 	}
 	hash->entry_count = entry_count;
@@ -123,4 +129,3 @@ bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator 
 	hash->bucket_start[0] = 0;
 	return true;
 }
-

@@ -18,7 +18,8 @@ static float box_distance(const plait_shape *shape, vec3 p, vec3 *normal)
 	float distance;
 	vec3 local_normal;
 	if (d.x > 0.0f || d.y > 0.0f || d.z > 0.0f) {
-		vec3 outside = {plait_maxf(d.x, 0.0f) * sign.x, plait_maxf(d.y, 0.0f) * sign.y, plait_maxf(d.z, 0.0f) * sign.z};
+		vec3 outside = {plait_maxf(d.x, 0.0f) * sign.x, plait_maxf(d.y, 0.0f) * sign.y,
+		                plait_maxf(d.z, 0.0f) * sign.z};
 		distance = v3_length(outside);
 		local_normal = v3_scale(outside, 1.0f / distance);
 	} else {
@@ -61,7 +62,8 @@ float plait_shape_distance(const plait_shape *shape, vec3 p, vec3 *normal)
 		t = plait_minf(plait_maxf(t, 0.0f), 1.0f);
 		vec3 closest = v3_mul_add(shape->a, t, ab);
 		/* On the axis itself any direction perpendicular to it is outward. */
-		vec3 fallback = v3_normalize(v3_cross(ab, fabsf(ab.x) < 0.9f * sqrtf(length_sq) ? v3(1, 0, 0) : v3(0, 1, 0)));
+		vec3 fallback =
+		    v3_normalize(v3_cross(ab, fabsf(ab.x) < 0.9f * sqrtf(length_sq) ? v3(1, 0, 0) : v3(0, 1, 0)));
 		if (length_sq == 0.0f) {
 			fallback = v3(0.0f, 1.0f, 0.0f);
 		}

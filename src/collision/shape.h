@@ -9,12 +9,12 @@
 
 typedef struct plait_shape {
 	plait_shape_type type;
-	vec3 point, normal;    /* plane */
-	vec3 center;           /* sphere, box */
-	float radius;          /* sphere, capsule */
-	vec3 a, b;             /* capsule */
-	vec3 half_extents;     /* box */
-	mat3 rotation;         /* box orientation: box space -> shape space */
+	vec3 point, normal; /* plane */
+	vec3 center;        /* sphere, box */
+	float radius;       /* sphere, capsule */
+	vec3 a, b;          /* capsule */
+	vec3 half_extents;  /* box */
+	mat3 rotation;      /* box orientation: box space -> shape space */
 } plait_shape;
 
 /* Rigid transform with uniform scale: world = translate + scale * rotation * shape. */
@@ -33,8 +33,14 @@ static inline vec3 plait_rigid_apply_inverse(const plait_rigid *r, vec3 p)
 {
 	return v3_scale(m3_tmul_v3(&r->rotation, v3_sub(p, r->translate)), 1.0f / r->scale);
 }
-static inline vec3 plait_rigid_rotate(const plait_rigid *r, vec3 v) { return m3_mul_v3(&r->rotation, v); }
-static inline vec3 plait_rigid_rotate_inverse(const plait_rigid *r, vec3 v) { return m3_tmul_v3(&r->rotation, v); }
+static inline vec3 plait_rigid_rotate(const plait_rigid *r, vec3 v)
+{
+	return m3_mul_v3(&r->rotation, v);
+}
+static inline vec3 plait_rigid_rotate_inverse(const plait_rigid *r, vec3 v)
+{
+	return m3_tmul_v3(&r->rotation, v);
+}
 
 /* Signed distance from p (shape space) to the surface; *normal receives the outward normal of
  * the nearest surface point (never zero). */

@@ -26,12 +26,18 @@ void plait_error_clear(plait_error *error)
 const char *plait_result_name(plait_result result)
 {
 	switch (result) {
-	case PLAIT_OK: return "ok";
-	case PLAIT_ERROR_INVALID_ARGUMENT: return "invalid argument";
-	case PLAIT_ERROR_INVALID_ID: return "invalid id";
-	case PLAIT_ERROR_INVALID_MESH: return "invalid mesh";
-	case PLAIT_ERROR_OUT_OF_MEMORY: return "out of memory";
-	case PLAIT_ERROR_NONFINITE: return "non-finite value";
+	case PLAIT_OK:
+		return "ok";
+	case PLAIT_ERROR_INVALID_ARGUMENT:
+		return "invalid argument";
+	case PLAIT_ERROR_INVALID_ID:
+		return "invalid id";
+	case PLAIT_ERROR_INVALID_MESH:
+		return "invalid mesh";
+	case PLAIT_ERROR_OUT_OF_MEMORY:
+		return "out of memory";
+	case PLAIT_ERROR_NONFINITE:
+		return "non-finite value";
 	}
 	return "unknown error";
 }

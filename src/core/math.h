@@ -18,8 +18,14 @@ typedef struct mat3 {
 #define PLAIT_PI 3.14159265358979323846f
 
 /* Plain comparisons: fmaxf/fminf must honour NaN rules and become library calls in hot loops. */
-static inline float plait_maxf(float a, float b) { return a > b ? a : b; }
-static inline float plait_minf(float a, float b) { return a < b ? a : b; }
+static inline float plait_maxf(float a, float b)
+{
+	return a > b ? a : b;
+}
+static inline float plait_minf(float a, float b)
+{
+	return a < b ? a : b;
+}
 
 /* atan2 within 2e-6 radians, with no library call: a minimax polynomial for atan on [0, 1]
  * and the octant folded back. Deterministic, and several times cheaper than atan2f. */
@@ -31,30 +37,71 @@ static inline float plait_atan2f(float y, float x)
 		return 0.0f;
 	}
 	float a = low / high, s = a * a;
-	float r = a * (0.99997726f +
-	               s * (-0.33262347f + s * (0.19354346f + s * (-0.11643287f + s * (0.05265332f + s * -0.01172120f)))));
+	float r =
+	    a *
+	    (0.99997726f +
+	     s * (-0.33262347f + s * (0.19354346f + s * (-0.11643287f + s * (0.05265332f + s * -0.01172120f)))));
 	r = ay > ax ? 1.57079632679489662f - r : r;
 	r = x < 0.0f ? 3.14159265358979324f - r : r;
 	return y < 0.0f ? -r : r;
 }
 
-static inline vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
-static inline vec3 v3_add(vec3 a, vec3 b) { return (vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
-static inline vec3 v3_sub(vec3 a, vec3 b) { return (vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
-static inline vec3 v3_scale(vec3 a, float s) { return (vec3){a.x * s, a.y * s, a.z * s}; }
-static inline vec3 v3_mul_add(vec3 a, float s, vec3 b) { return (vec3){a.x + s * b.x, a.y + s * b.y, a.z + s * b.z}; }
-static inline vec3 v3_neg(vec3 a) { return (vec3){-a.x, -a.y, -a.z}; }
-static inline float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3(float x, float y, float z)
+{
+	return (vec3){x, y, z};
+}
+static inline vec3 v3_add(vec3 a, vec3 b)
+{
+	return (vec3){a.x + b.x, a.y + b.y, a.z + b.z};
+}
+static inline vec3 v3_sub(vec3 a, vec3 b)
+{
+	return (vec3){a.x - b.x, a.y - b.y, a.z - b.z};
+}
+static inline vec3 v3_scale(vec3 a, float s)
+{
+	return (vec3){a.x * s, a.y * s, a.z * s};
+}
+static inline vec3 v3_mul_add(vec3 a, float s, vec3 b)
+{
+	return (vec3){a.x + s * b.x, a.y + s * b.y, a.z + s * b.z};
+}
+static inline vec3 v3_neg(vec3 a)
+{
+	return (vec3){-a.x, -a.y, -a.z};
+}
+static inline float v3_dot(vec3 a, vec3 b)
+{
+	return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 static inline vec3 v3_cross(vec3 a, vec3 b)
 {
 	return (vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-static inline float v3_length_sq(vec3 a) { return v3_dot(a, a); }
-static inline float v3_length(vec3 a) { return sqrtf(v3_dot(a, a)); }
-static inline vec3 v3_lerp(vec3 a, vec3 b, float t) { return v3_mul_add(a, t, v3_sub(b, a)); }
-static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
-static inline vec3 v3_min(vec3 a, vec3 b) { return (vec3){plait_minf(a.x, b.x), plait_minf(a.y, b.y), plait_minf(a.z, b.z)}; }
-static inline vec3 v3_max(vec3 a, vec3 b) { return (vec3){plait_maxf(a.x, b.x), plait_maxf(a.y, b.y), plait_maxf(a.z, b.z)}; }
+static inline float v3_length_sq(vec3 a)
+{
+	return v3_dot(a, a);
+}
+static inline float v3_length(vec3 a)
+{
+	return sqrtf(v3_dot(a, a));
+}
+static inline vec3 v3_lerp(vec3 a, vec3 b, float t)
+{
+	return v3_mul_add(a, t, v3_sub(b, a));
+}
+static inline bool v3_is_finite(vec3 a)
+{
+	return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+static inline vec3 v3_min(vec3 a, vec3 b)
+{
+	return (vec3){plait_minf(a.x, b.x), plait_minf(a.y, b.y), plait_minf(a.z, b.z)};
+}
+static inline vec3 v3_max(vec3 a, vec3 b)
+{
+	return (vec3){plait_maxf(a.x, b.x), plait_maxf(a.y, b.y), plait_maxf(a.z, b.z)};
+}
 
 /* Unit vector, or the zero vector when a is too short to have a direction. */
 static inline vec3 v3_normalize(vec3 a)

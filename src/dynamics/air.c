@@ -173,7 +173,8 @@ static vec3 solve_implicit_drag(float mass, float h, const float *k, vec3 rhs)
 	float c12 = a01 * a02 - a00 * a12;
 	float c22 = a00 * a11 - a01 * a01;
 	float inverse = 1.0f / determinant;
-	return v3((c00 * rhs.x + c01 * rhs.y + c02 * rhs.z) * inverse, (c01 * rhs.x + c11 * rhs.y + c12 * rhs.z) * inverse,
+	return v3((c00 * rhs.x + c01 * rhs.y + c02 * rhs.z) * inverse,
+	          (c01 * rhs.x + c11 * rhs.y + c12 * rhs.z) * inverse,
 	          (c02 * rhs.x + c12 * rhs.y + c22 * rhs.z) * inverse);
 }
 

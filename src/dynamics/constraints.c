@@ -194,7 +194,8 @@ static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w,
 		float g2x = nax * fa, g2y = nay * fa, g2z = naz * fa;
 		float g3x = nbx * fb, g3y = nby * fb, g3z = nbz * fb;
 		float a2 = (ax * ex + ay * ey + az * ez) / e2;
-		float dx3 = px[3][lane] - px[0][lane], dy3 = py[3][lane] - py[0][lane], dz3 = pz[3][lane] - pz[0][lane];
+		float dx3 = px[3][lane] - px[0][lane], dy3 = py[3][lane] - py[0][lane],
+		      dz3 = pz[3][lane] - pz[0][lane];
 		float a3 = (dx3 * ex + dy3 * ey + dz3 * ez) / e2;
 		gx[0][lane] = g2x * (a2 - 1.0f) + g3x * (a3 - 1.0f);
 		gy[0][lane] = g2y * (a2 - 1.0f) + g3y * (a3 - 1.0f);
@@ -210,7 +211,8 @@ static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w,
 		gz[3][lane] = g3z;
 		float denominator = 0.0f;
 		for (int k = 0; k < 4; ++k) {
-			denominator += wq[k][lane] * (gx[k][lane] * gx[k][lane] + gy[k][lane] * gy[k][lane] + gz[k][lane] * gz[k][lane]);
+			denominator += wq[k][lane] * (gx[k][lane] * gx[k][lane] + gy[k][lane] * gy[k][lane] +
+			                              gz[k][lane] * gz[k][lane]);
 		}
 		float alpha_tilde = compliance[lane] * inverse_h_squared;
 		denominator += alpha_tilde;

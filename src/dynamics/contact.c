@@ -90,8 +90,8 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 	return true;
 }
 
-static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3 surface_velocity, float bounce,
-                                    float stickiness)
+static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3 surface_velocity,
+                                    float bounce, float stickiness)
 {
 	p->flags[i] |= PLAIT_PARTICLE_CONTACT;
 	p->contact_normal[i] = normal;
@@ -329,8 +329,8 @@ static int collide_particle_pairs(plait_sim *sim)
 	}
 	/* Cells as wide as the largest particle: a resting particle touches up to 8 of them, a
 	 * moving one the cells its path sweeps. */
-	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper, count,
-	                               2.0f * max_radius) ||
+	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper,
+	                               count, 2.0f * max_radius) ||
 	    !ensure_pair_contacts(sim)) {
 		return 0;
 	}
@@ -443,7 +443,8 @@ int plait_count_penetrations(const plait_sim *sim)
 				continue;
 			}
 			vec3 normal;
-			float distance = plait_shape_distance(&c->shape, plait_rigid_apply_inverse(&r, p->x[i]), &normal) * r.scale;
+			float distance =
+			    plait_shape_distance(&c->shape, plait_rigid_apply_inverse(&r, p->x[i]), &normal) * r.scale;
 			if (distance < -(1e-4f + 0.01f * p->radius[i])) {
 				++count;
 			}

@@ -53,8 +53,8 @@ plait_result plait_schedule_build(plait_schedule *schedule, const plait_allocato
 {
 	memset(schedule, 0, sizeof *schedule);
 	if (substeps < 1 || kind_count < 0 || kind_count > PLAIT_MAX_KINDS) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "schedule needs substeps >= 1 and at most %d kinds",
-		                       PLAIT_MAX_KINDS);
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "schedule needs substeps >= 1 and at most %d kinds", PLAIT_MAX_KINDS);
 	}
 	int event_count = 0;
 	int max_per_substep = 0;
@@ -72,7 +72,8 @@ plait_result plait_schedule_build(plait_schedule *schedule, const plait_allocato
 	schedule->events = event_count > 0 ? plait_alloc_zero(allocator, (size_t)event_count, sizeof(int)) : NULL;
 	scheduled_event *scratch =
 	    max_per_substep > 0 ? plait_alloc_zero(allocator, (size_t)max_per_substep, sizeof *scratch) : NULL;
-	if (schedule->substep_start == NULL || (event_count > 0 && (schedule->events == NULL || scratch == NULL))) {
+	if (schedule->substep_start == NULL ||
+	    (event_count > 0 && (schedule->events == NULL || scratch == NULL))) {
 		plait_free(allocator, scratch);
 		plait_schedule_destroy(schedule, allocator);
 		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building the schedule");

@@ -19,40 +19,40 @@ enum {
 
 /* Per-object attributes the solver needs per particle (indexed by particles.material). */
 typedef struct plait_material {
-	int object;         /* owning object slot */
+	int object; /* owning object slot */
 	plait_object_type type;
-	float thickness;    /* scene units */
+	float thickness; /* scene units */
 	float friction;
 	float stickiness;
 	float bounce;
-	float damp;         /* 1/s */
-	float point_drag;   /* curves and particles: drag coefficient of each vertex */
-	float point_area;   /* m^2: cross-section used with point_drag */
+	float damp;                        /* 1/s */
+	float point_drag;                  /* curves and particles: drag coefficient of each vertex */
+	float point_area;                  /* m^2: cross-section used with point_drag */
 	float drag, tangential_drag, lift; /* cloth triangles */
 	bool collide;
-	bool self_collide;  /* loose particles of this object collide with each other */
+	bool self_collide; /* loose particles of this object collide with each other */
 } plait_material;
 
 /* Structure of arrays: one entry per particle of every object. */
 typedef struct plait_particles {
 	int count, capacity;
-	vec3 *x;      /* position, scene units */
-	vec3 *x_prev; /* position at the start of the current substep */
-	vec3 *v;      /* velocity, scene units per second */
-	vec3 *v_pre;  /* velocity after external forces, before constraints (restitution) */
-	float *w;     /* inverse mass, 1/kg; 0 = pinned */
-	float *mass;  /* kg, kept while pinned */
-	float *radius;/* collision radius, scene units */
+	vec3 *x;       /* position, scene units */
+	vec3 *x_prev;  /* position at the start of the current substep */
+	vec3 *v;       /* velocity, scene units per second */
+	vec3 *v_pre;   /* velocity after external forces, before constraints (restitution) */
+	float *w;      /* inverse mass, 1/kg; 0 = pinned */
+	float *mass;   /* kg, kept while pinned */
+	float *radius; /* collision radius, scene units */
 	int *material;
 	uint8_t *flags;
 	vec3 *pin_start, *pin_end; /* pin targets at frame start and end */
 	vec3 *contact_normal;      /* world normal of the last contact in this substep */
 	vec3 *contact_velocity;    /* velocity of the touched surface */
 	float *contact_bounce, *contact_stickiness;
-	float *drag_matrix;        /* 6 per particle: symmetric implicit air drag (kg/s) */
-	vec3 *air_force;           /* explicit air force toward the wind (N in scene units) */
-	vec3 *lift_force;          /* lift (N in scene units), limited when integrated */
-	vec3 *x_frame, *v_frame;   /* state at the start of the frame, restored if it fails */
+	float *drag_matrix;      /* 6 per particle: symmetric implicit air drag (kg/s) */
+	vec3 *air_force;         /* explicit air force toward the wind (N in scene units) */
+	vec3 *lift_force;        /* lift (N in scene units), limited when integrated */
+	vec3 *x_frame, *v_frame; /* state at the start of the frame, restored if it fails */
 } plait_particles;
 
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
@@ -120,7 +120,7 @@ typedef struct plait_collider {
 
 typedef struct plait_particle_contact {
 	int i, j;
-	vec3 normal; /* from i to j */
+	vec3 normal;          /* from i to j */
 	float approach_speed; /* relative normal velocity before the substep (negative: closing) */
 	float bounce;
 } plait_particle_contact;
@@ -138,7 +138,7 @@ typedef enum plait_kind {
 typedef struct plait_settings {
 	float fps, time_scale, space_scale;
 	int substeps, max_collision_iterations;
-	vec3 gravity;     /* scene units / s^2 */
+	vec3 gravity; /* scene units / s^2 */
 	float air_density;
 	vec3 wind_velocity; /* scene units / s */
 	float wind_noise;
@@ -170,15 +170,15 @@ typedef struct plait_sim {
 	bool particle_pairs_active;
 	int pair_contact_count, pair_contact_capacity;
 	plait_particle_contact *pair_contacts;
-	void *hash; /* plait_particle_hash, owned by contact.c */
-	int *pair_list; /* particles taking part in particle-pair collisions */
+	void *hash;                    /* plait_particle_hash, owned by contact.c */
+	int *pair_list;                /* particles taking part in particle-pair collisions */
 	vec3 *pair_lower, *pair_upper; /* their swept, thickened boxes */
 	int pair_list_capacity;
 
 	int frame;
-	double time; /* seconds simulated */
+	double time;        /* seconds simulated */
 	float substep_time; /* h, seconds */
-	int substep; /* current substep in the frame */
+	int substep;        /* current substep in the frame */
 	/* Per-frame counters. */
 	int contacts;
 	int constraint_solves;

@@ -38,12 +38,26 @@ void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
 static void free_particles(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
-	void *fields[] = {p->x,         p->x_prev,         p->v,
-	                  p->v_pre,     p->w,              p->mass,
-	                  p->radius,    p->material,       p->flags,
-	                  p->pin_start, p->pin_end,        p->contact_normal,
-	                  p->contact_velocity, p->contact_bounce, p->contact_stickiness,
-	                  p->drag_matrix, p->air_force, p->lift_force, p->x_frame, p->v_frame};
+	void *fields[] = {p->x,
+	                  p->x_prev,
+	                  p->v,
+	                  p->v_pre,
+	                  p->w,
+	                  p->mass,
+	                  p->radius,
+	                  p->material,
+	                  p->flags,
+	                  p->pin_start,
+	                  p->pin_end,
+	                  p->contact_normal,
+	                  p->contact_velocity,
+	                  p->contact_bounce,
+	                  p->contact_stickiness,
+	                  p->drag_matrix,
+	                  p->air_force,
+	                  p->lift_force,
+	                  p->x_frame,
+	                  p->v_frame};
 	for (size_t k = 0; k < sizeof fields / sizeof fields[0]; ++k) {
 		plait_free(&sim->allocator, fields[k]);
 	}
@@ -249,8 +263,8 @@ bool plait_sim_reserve_colliders(plait_sim *sim, int count)
 	return true;
 }
 
-int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float mass, float radius, int material,
-                           uint8_t flags)
+int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float mass, float radius,
+                           int material, uint8_t flags)
 {
 	plait_particles *p = &sim->particles;
 	int i = p->count++;
@@ -407,7 +421,8 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 #define BATCH_WINDOW 64
 
 /* Applies order (indices relative to first) to count elements of size bytes at data + first. */
-static bool permute(const plait_allocator *allocator, void *data, size_t size, int first, int count, const int *order)
+static bool permute(const plait_allocator *allocator, void *data, size_t size, int first, int count,
+                    const int *order)
 {
 	char *scratch = plait_alloc(allocator, size * (size_t)count);
 	if (scratch == NULL) {
@@ -453,9 +468,9 @@ bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first
 	const plait_allocator *a = &sim->allocator;
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	int batches = order != NULL && sizes != NULL
-	                  ? plait_batch_order(a, &b->pair[first][0], 2, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
-	                  : -1;
+	int batches = order != NULL && sizes != NULL ? plait_batch_order(a, &b->pair[first][0], 2, count,
+	                                                                 BATCH_WIDTH, BATCH_WINDOW, order, sizes)
+	                                             : -1;
 	bool ok = batches >= 0 && permute(a, b->pair, sizeof *b->pair, first, count, order) &&
 	          permute(a, b->rest, sizeof(float), first, count, order) &&
 	          permute(a, b->compliance_tension, sizeof(float), first, count, order) &&
@@ -477,9 +492,9 @@ bool plait_sim_batch_bend(plait_sim *sim, int first)
 	const plait_allocator *a = &sim->allocator;
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	int batches = order != NULL && sizes != NULL
-	                  ? plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
-	                  : -1;
+	int batches = order != NULL && sizes != NULL ? plait_batch_order(a, &b->quad[first][0], 4, count,
+	                                                                 BATCH_WIDTH, BATCH_WINDOW, order, sizes)
+	                                             : -1;
 	bool ok = batches >= 0 && permute(a, b->quad, sizeof *b->quad, first, count, order) &&
 	          permute(a, b->rest_angle, sizeof(float), first, count, order) &&
 	          permute(a, b->compliance, sizeof(float), first, count, order) &&

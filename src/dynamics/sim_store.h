@@ -19,16 +19,14 @@ bool plait_sim_reserve_materials(plait_sim *sim, int count);
 bool plait_sim_reserve_colliders(plait_sim *sim, int count);
 
 /* Appends one particle (room must be reserved); returns its index. */
-int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float mass, float radius, int material,
-                           uint8_t flags);
+int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float mass, float radius,
+                           int material, uint8_t flags);
 void plait_sim_add_distance(plait_distance_block *block, int i, int j, float rest, float compliance_tension,
                             float compliance_compression);
 
 /* Removes every particle whose keep[] entry is false, every constraint touching one, and
  * renumbers the rest; materials and colliders of the object are removed by the caller. */
 bool plait_sim_compact(plait_sim *sim, const bool *keep);
-
-
 
 /* Reorders constraints [first, block count) of each block into independent batches
  * (dynamics/batching.h). Called after an object's constraints are appended. */

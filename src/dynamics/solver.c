@@ -25,7 +25,8 @@ plait_result plait_sim_update_schedule(plait_sim *sim, plait_error *error)
 		if (!sim->kind_active[k]) {
 			continue;
 		}
-		int importance = k == PLAIT_KIND_COLLISION ? sim->settings.max_collision_iterations : sim->kind_importance[k];
+		int importance =
+		    k == PLAIT_KIND_COLLISION ? sim->settings.max_collision_iterations : sim->kind_importance[k];
 		kinds[count] = (plait_kind_desc){plait_kind_names[k], kind_order[k], importance};
 		sim->schedule_kinds[count] = k;
 		++count;

@@ -7,9 +7,9 @@
 
 /* One (edge, triangle) incidence, sorted by edge to find unique edges and their parents. */
 typedef struct edge_record {
-	int a, b;      /* a < b */
-	int triangle;  /* parent triangle */
-	int corner;    /* edge is triangle corner k -> k+1 */
+	int a, b;     /* a < b */
+	int triangle; /* parent triangle */
+	int corner;   /* edge is triangle corner k -> k+1 */
 	uint8_t flags;
 } edge_record;
 
@@ -52,14 +52,15 @@ static plait_result validate_faces(int vertex_count, const int *face_sizes, int 
 	for (int f = 0; f < face_count; ++f) {
 		int size = face_sizes[f];
 		if (size < 3) {
-			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "face %d has %d vertices; a face needs at least 3",
-			                       f, size);
+			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH,
+			                       "face %d has %d vertices; a face needs at least 3", f, size);
 		}
 		const int *face = face_indices + indices;
 		for (int k = 0; k < size; ++k) {
 			if (face[k] < 0 || face[k] >= vertex_count) {
 				return plait_error_set(error, PLAIT_ERROR_INVALID_MESH,
-				                       "face %d uses vertex index %d, outside 0..%d", f, face[k], vertex_count - 1);
+				                       "face %d uses vertex index %d, outside 0..%d", f, face[k],
+				                       vertex_count - 1);
 			}
 			for (int m = 0; m < k; ++m) {
 				if (face[m] == face[k]) {
@@ -88,8 +89,8 @@ plait_result plait_topology_build(plait_topology *t, const plait_allocator *allo
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "face arrays are missing");
 	}
 	int index_count = 0, triangle_count = 0;
-	plait_result result =
-	    validate_faces(vertex_count, face_sizes, face_count, face_indices, &index_count, &triangle_count, error);
+	plait_result result = validate_faces(vertex_count, face_sizes, face_count, face_indices, &index_count,
+	                                     &triangle_count, error);
 	if (result != PLAIT_OK) {
 		return result;
 	}

@@ -29,24 +29,24 @@ typedef struct plait_topology {
 	/* Triangles, oriented as the input polygon; a polygon (a,b,c,d,...) is fanned from a. */
 	int triangle_count;
 	int (*triangles)[3];
-	int *triangle_polygon;  /* the polygon each triangle came from */
+	int *triangle_polygon;    /* the polygon each triangle came from */
 	int (*triangle_edges)[3]; /* children: edge k joins corners k and k+1 */
 
 	/* Edges with vertex[0] < vertex[1] (lexicographic order, paper §3). */
 	int edge_count;
 	int (*edges)[2];
-	uint8_t *edge_flags;        /* PLAIT_EDGE_* */
-	int (*edge_triangles)[2];   /* first two parent triangles, -1 when absent */
-	int *edge_triangle_count;   /* all parents: 1 = border, 2 = interior, >2 = non-manifold */
+	uint8_t *edge_flags;      /* PLAIT_EDGE_* */
+	int (*edge_triangles)[2]; /* first two parent triangles, -1 when absent */
+	int *edge_triangle_count; /* all parents: 1 = border, 2 = interior, >2 = non-manifold */
 
 	int *vertex_valence; /* parent edges of each vertex */
 } plait_topology;
 
 /* Builds the complex. Fails (returning PLAIT_ERROR_INVALID_MESH with a message) on a face with
  * fewer than 3 vertices, an index out of range, or a face that repeats a vertex. */
-plait_result plait_topology_build(plait_topology *topology, const plait_allocator *allocator, int vertex_count,
-                                  const int *face_sizes, int face_count, const int *face_indices,
-                                  plait_error *error);
+plait_result plait_topology_build(plait_topology *topology, const plait_allocator *allocator,
+                                  int vertex_count, const int *face_sizes, int face_count,
+                                  const int *face_indices, plait_error *error);
 void plait_topology_destroy(plait_topology *topology, const plait_allocator *allocator);
 
 /* The edge joining a and b, or -1. Binary search: edges are sorted. */

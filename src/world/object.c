@@ -26,15 +26,21 @@
 #define BEND_STIFFNESS_PER_RESISTANCE 1e-4f     /* N m */
 #define MAX_RESISTANCE 10000.0f
 
-static bool in_range(float value, float low, float high) { return value >= low && value <= high; }
-static bool finite3(plait_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+static bool in_range(float value, float low, float high)
+{
+	return value >= low && value <= high;
+}
+static bool finite3(plait_vec3 v)
+{
+	return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
+}
 
-static plait_result check_range(plait_error *error, const char *object, const char *field, float value, float low,
-                                float high)
+static plait_result check_range(plait_error *error, const char *object, const char *field, float value,
+                                float low, float high)
 {
 	if (!in_range(value, low, high)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: %s must be in %g..%g, got %g", object,
-		                       field, (double)low, (double)high, (double)value);
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: %s must be in %g..%g, got %g",
+		                       object, field, (double)low, (double)high, (double)value);
 	}
 	return PLAIT_OK;
 }
@@ -59,7 +65,8 @@ static plait_result check_positions(plait_error *error, const char *object, cons
 	}
 	for (int i = 0; i < count; ++i) {
 		if (!finite3(positions[i])) {
-			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s[%d] is not finite", object, field, i);
+			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s[%d] is not finite", object, field,
+			                       i);
 		}
 	}
 	return PLAIT_OK;
@@ -73,8 +80,9 @@ static plait_result check_pins(plait_error *error, const char *object, const int
 	}
 	for (int k = 0; k < pin_count; ++k) {
 		if (pins[k] < 0 || pins[k] >= vertex_count) {
-			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: pin %d is vertex %d, outside 0..%d",
-			                       object, k, pins[k], vertex_count - 1);
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+			                       "%s: pin %d is vertex %d, outside 0..%d", object, k, pins[k],
+			                       vertex_count - 1);
 		}
 	}
 	return PLAIT_OK;
@@ -161,11 +169,14 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	    (def->velocities != NULL &&
 	     check_positions(error, label, "velocities", def->velocities, mesh->vertex_count) != PLAIT_OK) ||
 	    check_range(error, label, "density", def->density, 1e-9f, 1e6f) != PLAIT_OK ||
-	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
-	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f, MAX_RESISTANCE) !=
+	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) !=
 	        PLAIT_OK ||
-	    check_range(error, label, "shear_resistance", def->shear_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
-	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f,
+	                MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "shear_resistance", def->shear_resistance, 0.0f, MAX_RESISTANCE) !=
+	        PLAIT_OK ||
+	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) !=
+	        PLAIT_OK ||
 	    check_range(error, label, "rest_length_scale", def->rest_length_scale, 0.01f, 10.0f) != PLAIT_OK ||
 	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "tangential_drag", def->tangential_drag, 0.0f, 1e6f) != PLAIT_OK ||
@@ -180,13 +191,14 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		return id;
 	}
 	if (def->tethers < PLAIT_TETHER_NONE || def->tethers > PLAIT_TETHER_GEODESIC) {
-		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown tether mode %d", label, (int)def->tethers);
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown tether mode %d", label,
+		                (int)def->tethers);
 		return id;
 	}
 	for (int i = 0; def->vertex_masses != NULL && i < mesh->vertex_count; ++i) {
 		if (!(def->vertex_masses[i] > 0.0f) || !isfinite(def->vertex_masses[i])) {
-			plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: vertex_masses[%d] must be > 0, got %g", label, i,
-			                (double)def->vertex_masses[i]);
+			plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: vertex_masses[%d] must be > 0, got %g",
+			                label, i, (double)def->vertex_masses[i]);
 			return id;
 		}
 	}
@@ -197,8 +209,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		return (plait_object_id){0};
 	}
 	plait_topology *topology = &object->topology;
-	if (plait_topology_build(topology, &world->allocator, mesh->vertex_count, mesh->face_sizes, mesh->face_count,
-	                         mesh->face_indices, error) != PLAIT_OK) {
+	if (plait_topology_build(topology, &world->allocator, mesh->vertex_count, mesh->face_sizes,
+	                         mesh->face_count, mesh->face_indices, error) != PLAIT_OK) {
 		char reason[PLAIT_ERROR_MESSAGE_SIZE];
 		snprintf(reason, sizeof reason, "%s", error != NULL ? error->message : "");
 		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s", label, reason);
@@ -221,9 +233,11 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	float *polygon_area = plait_alloc_zero(a, (size_t)topology->polygon_count, sizeof(float));
 	float *triangle_area = plait_alloc_zero(a, (size_t)topology->triangle_count, sizeof(float));
 	float *vertex_area = plait_alloc_zero(a, (size_t)vertex_count, sizeof(float));
-	bool ok = polygon_area && triangle_area && vertex_area && plait_sim_reserve_particles(sim, vertex_count) &&
-	          plait_sim_reserve_materials(sim, 1) && plait_sim_reserve_distance(sim, &sim->stretch, topology->edge_count) &&
-	          plait_sim_reserve_distance(sim, &sim->shear, 2 * quad_count) && plait_sim_reserve_bend(sim, bend_count) &&
+	bool ok = polygon_area && triangle_area && vertex_area &&
+	          plait_sim_reserve_particles(sim, vertex_count) && plait_sim_reserve_materials(sim, 1) &&
+	          plait_sim_reserve_distance(sim, &sim->stretch, topology->edge_count) &&
+	          plait_sim_reserve_distance(sim, &sim->shear, 2 * quad_count) &&
+	          plait_sim_reserve_bend(sim, bend_count) &&
 	          plait_sim_reserve_aero(sim, topology->triangle_count) &&
 	          (def->tethers == PLAIT_TETHER_NONE || plait_sim_reserve_tethers(sim, vertex_count));
 	if (!ok) {
@@ -284,7 +298,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	/* Stretch and compression on polygon edges (and fan diagonals of polygons larger than
 	 * quads); shear on both diagonals of each quad (seed 003: separate shear). */
 	float stretch_alpha = stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
-	float compression_alpha = stiffness_compliance(def->compression_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
+	float compression_alpha =
+	    stiffness_compliance(def->compression_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
 	float shear_alpha = stiffness_compliance(def->shear_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
 	bool has_stretch = def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f;
 	for (int e = 0; e < topology->edge_count && has_stretch; ++e) {
@@ -304,7 +319,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		float rest = v3_length(v3_sub(x[v1], x[v0]));
 		float ratio = edge_area > 0.0f && rest > 0.0f ? rest * rest / edge_area : 1.0f;
 		plait_sim_add_distance(&sim->stretch, first + v0, first + v1, rest * def->rest_length_scale,
-		                       scale_compliance(stretch_alpha, ratio), scale_compliance(compression_alpha, ratio));
+		                       scale_compliance(stretch_alpha, ratio),
+		                       scale_compliance(compression_alpha, ratio));
 	}
 	if (def->shear_resistance > 0.0f) {
 		for (int f = 0; f < topology->polygon_count; ++f) {
@@ -318,7 +334,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 				float edge_area = 0.5f * polygon_area[f];
 				float ratio = edge_area > 0.0f && rest > 0.0f ? rest * rest / edge_area : 1.0f;
 				plait_sim_add_distance(&sim->shear, first + v0, first + v1, rest * def->rest_length_scale,
-				                       scale_compliance(shear_alpha, ratio), scale_compliance(shear_alpha, ratio));
+				                       scale_compliance(shear_alpha, ratio),
+				                       scale_compliance(shear_alpha, ratio));
 			}
 		}
 	}
@@ -375,12 +392,14 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	for (int f = 0; f < topology->polygon_count; ++f) {
 		int size = topology->polygon_sizes[f];
 		int triangles = size - 2;
-		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles && exposure != NULL; ++t) {
+		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles && exposure != NULL;
+		     ++t) {
 			for (int k = 0; k < 3; ++k) {
 				exposure[topology->triangles[t][k]] = 0.0f;
 			}
 		}
-		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles && exposure != NULL; ++t) {
+		for (int t = polygon_start_triangle; t < polygon_start_triangle + triangles && exposure != NULL;
+		     ++t) {
 			for (int k = 0; k < 3; ++k) {
 				exposure[topology->triangles[t][k]] += triangle_area[t];
 			}
@@ -392,7 +411,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 				float share = polygon_area[f] / (float)size;
 				float s_v = exposure != NULL ? exposure[v] : 0.0f;
 				sim->aero.triangle[c][k] = first + v;
-				sim->aero.weight[c][k] = s_v > 0.0f ? triangle_area[t] * share / s_v : triangle_area[t] / 3.0f;
+				sim->aero.weight[c][k] =
+				    s_v > 0.0f ? triangle_area[t] * share / s_v : triangle_area[t] / 3.0f;
 			}
 			sim->aero.material[c] = material;
 		}
@@ -403,8 +423,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	plait_free(a, triangle_area);
 	plait_free(a, vertex_area);
 	/* Should the tethers' scratch memory run out, the cloth still works, untethered. */
-	(void)plait_build_tethers(sim, topology, x, first, def->pins, def->pin_count, def->tethers, def->tether_scale,
-	                          def->tether_stiffness);
+	(void)plait_build_tethers(sim, topology, x, first, def->pins, def->pin_count, def->tethers,
+	                          def->tether_scale, def->tether_stiffness);
 	/* Out of memory here only loses speed, never correctness: the order stays as built. */
 	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
 	plait_sim_batch_distance(sim, &sim->shear, first_shear);
@@ -412,8 +432,9 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 
 	int override = def->iterations;
 	object->importance[PLAIT_KIND_STRETCH] =
-	    override > 0 ? override
-	                 : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
+	    override > 0
+	        ? override
+	        : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
 	object->importance[PLAIT_KIND_SHEAR] = resistance_importance(def->shear_resistance);
 	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	object->importance[PLAIT_KIND_TETHER] = 1; /* cheap and decisive: once per substep */
@@ -434,16 +455,20 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	object_label(label, sizeof label, "curve", def->name);
 	int n = def->vertex_count;
 	if (n < 2) {
-		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: a curve needs at least 2 vertices, got %d", label, n);
+		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: a curve needs at least 2 vertices, got %d",
+		                label, n);
 		return id;
 	}
 	if (check_positions(error, label, "positions", def->positions, n) != PLAIT_OK ||
-	    (def->velocities != NULL && check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
+	    (def->velocities != NULL &&
+	     check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
 	    check_range(error, label, "mass", def->mass, 1e-12f, 1e9f) != PLAIT_OK ||
-	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
-	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f, MAX_RESISTANCE) !=
+	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) !=
 	        PLAIT_OK ||
-	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f,
+	                MAX_RESISTANCE) != PLAIT_OK ||
+	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) !=
+	        PLAIT_OK ||
 	    check_range(error, label, "rest_length_scale", def->rest_length_scale, 0.01f, 10.0f) != PLAIT_OK ||
 	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
@@ -455,8 +480,8 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	}
 	for (int i = 0; i + 1 < n; ++i) {
 		if (v3_length(v3_sub(def->positions[i + 1], def->positions[i])) <= 0.0f) {
-			plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: vertices %d and %d coincide (zero-length edge)",
-			                label, i, i + 1);
+			plait_error_set(error, PLAIT_ERROR_INVALID_MESH,
+			                "%s: vertices %d and %d coincide (zero-length edge)", label, i, i + 1);
 			return id;
 		}
 	}
@@ -483,7 +508,8 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	uint8_t flags = def->surface.collide ? PLAIT_PARTICLE_COLLIDE : 0;
 	for (int i = 0; i < n; ++i) {
 		vec3 velocity = def->velocities != NULL ? def->velocities[i] : v3(0.0f, 0.0f, 0.0f);
-		plait_sim_add_particle(sim, def->positions[i], velocity, def->mass, def->surface.thickness, material, flags);
+		plait_sim_add_particle(sim, def->positions[i], velocity, def->mass, def->surface.thickness, material,
+		                       flags);
 	}
 	int first = object->first_particle;
 	apply_pins(sim, first, def->pins, def->pin_count);
@@ -492,13 +518,15 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	const plait_vec3 *x = def->positions;
 	if (def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f) {
 		/* alpha = L / EA with EA = R * 100 N, converted to scene units by 1 / space_scale. */
-		float tension_alpha = stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE / scale);
+		float tension_alpha =
+		    stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE / scale);
 		float compression_alpha =
 		    stiffness_compliance(def->compression_resistance, STRETCH_STIFFNESS_PER_RESISTANCE / scale);
 		for (int i = 0; i + 1 < n; ++i) {
 			float rest = v3_length(v3_sub(x[i + 1], x[i]));
 			plait_sim_add_distance(&sim->stretch, first + i, first + i + 1, rest * def->rest_length_scale,
-			                       scale_compliance(tension_alpha, rest), scale_compliance(compression_alpha, rest));
+			                       scale_compliance(tension_alpha, rest),
+			                       scale_compliance(compression_alpha, rest));
 		}
 	}
 	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
@@ -518,31 +546,36 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	}
 	int override = def->iterations;
 	object->importance[PLAIT_KIND_STRETCH] =
-	    override > 0 ? override
-	                 : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
+	    override > 0
+	        ? override
+	        : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
 	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
 	plait_world_update_kinds(world);
 	return id;
 }
 
-plait_object_id plait_create_particles(plait_world_id world_id, const plait_particles_def *def, plait_error *error)
+plait_object_id plait_create_particles(plait_world_id world_id, const plait_particles_def *def,
+                                       plait_error *error)
 {
 	plait_object_id id = {0};
 	plait_world *world = world_id.world;
 	plait_error_clear(error);
 	if (world == NULL || def == NULL) {
-		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "plait_create_particles needs a world and a def");
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                "plait_create_particles needs a world and a def");
 		return id;
 	}
 	char label[PLAIT_MAX_NAME + 16];
 	object_label(label, sizeof label, "particles", def->name);
 	int n = def->count;
 	if (n < 1) {
-		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: needs at least one particle, got %d", label, n);
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: needs at least one particle, got %d", label,
+		                n);
 		return id;
 	}
 	if (check_positions(error, label, "positions", def->positions, n) != PLAIT_OK ||
-	    (def->velocities != NULL && check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
+	    (def->velocities != NULL &&
+	     check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
 	    check_range(error, label, "mass", def->mass, 1e-12f, 1e9f) != PLAIT_OK ||
 	    check_range(error, label, "radius", def->radius, 1e-9f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
@@ -607,8 +640,8 @@ static plait_result build_shape(const plait_collider_def *def, const char *label
 	case PLAIT_SHAPE_CAPSULE:
 		if (!finite3(def->a) || !finite3(def->b) || !(def->radius > 0.0f) || !isfinite(def->radius)) {
 			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
-			                       "%s: a capsule needs finite ends a, b and radius > 0, got radius %g", label,
-			                       (double)def->radius);
+			                       "%s: a capsule needs finite ends a, b and radius > 0, got radius %g",
+			                       label, (double)def->radius);
 		}
 		shape->a = def->a;
 		shape->b = def->b;
@@ -617,9 +650,9 @@ static plait_result build_shape(const plait_collider_def *def, const char *label
 	case PLAIT_SHAPE_BOX:
 		if (!finite3(def->center) || !finite3(def->rotation_deg) || !(def->size.x > 0.0f) ||
 		    !(def->size.y > 0.0f) || !(def->size.z > 0.0f) || !finite3(def->size)) {
-			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
-			                       "%s: a box needs a finite center and rotation and a size > 0 on every axis",
-			                       label);
+			return plait_error_set(
+			    error, PLAIT_ERROR_INVALID_ARGUMENT,
+			    "%s: a box needs a finite center and rotation and a size > 0 on every axis", label);
 		}
 		shape->center = def->center;
 		shape->half_extents = v3_scale(def->size, 0.5f);
@@ -629,7 +662,8 @@ static plait_result build_shape(const plait_collider_def *def, const char *label
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
 		                       "%s: triangle-mesh colliders are not supported yet", label);
 	}
-	return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown shape %d", label, (int)def->shape);
+	return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown shape %d", label,
+	                       (int)def->shape);
 }
 
 static plait_result check_transform(plait_error *error, const char *label, plait_transform t)
@@ -641,7 +675,8 @@ static plait_result check_transform(plait_error *error, const char *label, plait
 	return PLAIT_OK;
 }
 
-plait_object_id plait_create_collider(plait_world_id world_id, const plait_collider_def *def, plait_error *error)
+plait_object_id plait_create_collider(plait_world_id world_id, const plait_collider_def *def,
+                                      plait_error *error)
 {
 	plait_object_id id = {0};
 	plait_world *world = world_id.world;
@@ -653,7 +688,8 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 	char label[PLAIT_MAX_NAME + 16];
 	object_label(label, sizeof label, "collider", def->name);
 	plait_shape shape;
-	if (build_shape(def, label, &shape, error) != PLAIT_OK || check_surface(error, label, &def->surface) != PLAIT_OK ||
+	if (build_shape(def, label, &shape, error) != PLAIT_OK ||
+	    check_surface(error, label, &def->surface) != PLAIT_OK ||
 	    check_transform(error, label, def->transform) != PLAIT_OK) {
 		return id;
 	}

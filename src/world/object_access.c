@@ -32,7 +32,8 @@ void plait_destroy_object(plait_object_id id)
 	}
 	if (object->collider >= 0) {
 		int k = object->collider;
-		memmove(&sim->colliders[k], &sim->colliders[k + 1], sizeof *sim->colliders * (size_t)(sim->collider_count - k - 1));
+		memmove(&sim->colliders[k], &sim->colliders[k + 1],
+		        sizeof *sim->colliders * (size_t)(sim->collider_count - k - 1));
 		sim->collider_count -= 1;
 		for (int o = 0; o < world->object_count; ++o) {
 			if (world->objects[o].collider > k) {
@@ -56,7 +57,10 @@ void plait_destroy_object(plait_object_id id)
 	plait_world_update_kinds(world);
 }
 
-bool plait_object_is_valid(plait_object_id id) { return plait_world_resolve(id, NULL) != NULL; }
+bool plait_object_is_valid(plait_object_id id)
+{
+	return plait_world_resolve(id, NULL) != NULL;
+}
 
 plait_object_type plait_object_get_type(plait_object_id id)
 {
@@ -139,7 +143,8 @@ int plait_object_get_faces(plait_object_id id, int *face_sizes, int *face_indice
 	return t->polygon_count;
 }
 
-static plait_object *resolve_range(plait_object_id id, int first, int count, const void *buffer, plait_error *error)
+static plait_object *resolve_range(plait_object_id id, int first, int count, const void *buffer,
+                                   plait_error *error)
 {
 	plait_object *object = plait_world_resolve(id, error);
 	if (object == NULL) {
@@ -147,21 +152,23 @@ static plait_object *resolve_range(plait_object_id id, int first, int count, con
 	}
 	if (first < 0 || count < 0 || first + count > object->particle_count || (count > 0 && buffer == NULL)) {
 		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
-		                "'%s': vertex range %d..%d is outside its %d vertices (or the buffer is NULL)", object->name,
-		                first, first + count - 1, object->particle_count);
+		                "'%s': vertex range %d..%d is outside its %d vertices (or the buffer is NULL)",
+		                object->name, first, first + count - 1, object->particle_count);
 		return NULL;
 	}
 	return object;
 }
 
-plait_result plait_object_get_positions(plait_object_id id, int first, int count, plait_vec3 *out, plait_error *error)
+plait_result plait_object_get_positions(plait_object_id id, int first, int count, plait_vec3 *out,
+                                        plait_error *error)
 {
 	plait_object *object = resolve_range(id, first, count, out, error);
 	if (object == NULL) {
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
 	if (count > 0) {
-		memcpy(out, id.world->sim.particles.x + object->first_particle + first, sizeof(plait_vec3) * (size_t)count);
+		memcpy(out, id.world->sim.particles.x + object->first_particle + first,
+		       sizeof(plait_vec3) * (size_t)count);
 	}
 	return PLAIT_OK;
 }
@@ -174,7 +181,8 @@ plait_result plait_object_get_velocities(plait_object_id id, int first, int coun
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
 	if (count > 0) {
-		memcpy(out, id.world->sim.particles.v + object->first_particle + first, sizeof(plait_vec3) * (size_t)count);
+		memcpy(out, id.world->sim.particles.v + object->first_particle + first,
+		       sizeof(plait_vec3) * (size_t)count);
 	}
 	return PLAIT_OK;
 }
@@ -197,7 +205,8 @@ plait_result plait_object_set_positions(plait_object_id id, int first, int count
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
 	if (!all_finite(positions, count)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': positions must be finite", object->name);
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': positions must be finite",
+		                       object->name);
 	}
 	plait_particles *p = &id.world->sim.particles;
 	for (int k = 0; k < count; ++k) {
@@ -211,18 +220,20 @@ plait_result plait_object_set_positions(plait_object_id id, int first, int count
 	return PLAIT_OK;
 }
 
-plait_result plait_object_set_velocities(plait_object_id id, int first, int count, const plait_vec3 *velocities,
-                                         plait_error *error)
+plait_result plait_object_set_velocities(plait_object_id id, int first, int count,
+                                         const plait_vec3 *velocities, plait_error *error)
 {
 	plait_object *object = resolve_range(id, first, count, velocities, error);
 	if (object == NULL) {
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
 	if (!all_finite(velocities, count)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': velocities must be finite", object->name);
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': velocities must be finite",
+		                       object->name);
 	}
 	if (count > 0) {
-		memcpy(id.world->sim.particles.v + object->first_particle + first, velocities, sizeof(plait_vec3) * (size_t)count);
+		memcpy(id.world->sim.particles.v + object->first_particle + first, velocities,
+		       sizeof(plait_vec3) * (size_t)count);
 	}
 	return PLAIT_OK;
 }
@@ -234,8 +245,8 @@ static plait_object *resolve_vertex(plait_object_id id, int vertex, plait_vec3 t
 		return NULL;
 	}
 	if (vertex < 0 || vertex >= object->particle_count) {
-		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': vertex %d is outside 0..%d", object->name, vertex,
-		                object->particle_count - 1);
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': vertex %d is outside 0..%d", object->name,
+		                vertex, object->particle_count - 1);
 		return NULL;
 	}
 	if (!v3_is_finite(target)) {
@@ -274,7 +285,8 @@ plait_result plait_object_unpin_vertex(plait_object_id id, int vertex, plait_err
 	return PLAIT_OK;
 }
 
-plait_result plait_object_set_pin_target(plait_object_id id, int vertex, plait_vec3 target, plait_error *error)
+plait_result plait_object_set_pin_target(plait_object_id id, int vertex, plait_vec3 target,
+                                         plait_error *error)
 {
 	plait_object *object = resolve_vertex(id, vertex, target, error);
 	if (object == NULL) {
@@ -283,8 +295,8 @@ plait_result plait_object_set_pin_target(plait_object_id id, int vertex, plait_v
 	plait_particles *p = &id.world->sim.particles;
 	int i = object->first_particle + vertex;
 	if (!(p->flags[i] & PLAIT_PARTICLE_PINNED)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': vertex %d is not pinned", object->name,
-		                       vertex);
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': vertex %d is not pinned",
+		                       object->name, vertex);
 	}
 	p->pin_end[i] = target;
 	return PLAIT_OK;
@@ -309,8 +321,8 @@ plait_result plait_collider_set_transform(plait_object_id id, plait_transform tr
 	if (collider == NULL) {
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
-	if (!v3_is_finite(transform.translate) || !v3_is_finite(transform.rotate_deg) || !(transform.scale > 0.0f) ||
-	    !isfinite(transform.scale)) {
+	if (!v3_is_finite(transform.translate) || !v3_is_finite(transform.rotate_deg) ||
+	    !(transform.scale > 0.0f) || !isfinite(transform.scale)) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
 		                       "collider transform needs finite translate and rotate and scale > 0");
 	}

@@ -66,8 +66,8 @@ static int graph_link_count(const plait_topology *t)
 	return links;
 }
 
-static bool geodesic_anchors(const plait_allocator *a, const plait_topology *t, const vec3 *x, const int *pins,
-                             int pin_count, float *distance, int *anchor)
+static bool geodesic_anchors(const plait_allocator *a, const plait_topology *t, const vec3 *x,
+                             const int *pins, int pin_count, float *distance, int *anchor)
 {
 	int n = t->vertex_count;
 	int links = graph_link_count(t);

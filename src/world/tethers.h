@@ -7,7 +7,8 @@
 
 /* Appends one tether per free vertex to its nearest pin (room must be reserved: one per
  * vertex). x are rest positions of the object's vertices, first its first particle. */
-bool plait_build_tethers(plait_sim *sim, const plait_topology *topology, const vec3 *x, int first, const int *pins,
-                         int pin_count, plait_tether_mode mode, float scale, float stiffness);
+bool plait_build_tethers(plait_sim *sim, const plait_topology *topology, const vec3 *x, int first,
+                         const int *pins, int pin_count, plait_tether_mode mode, float scale,
+                         float stiffness);
 
 #endif

@@ -28,7 +28,10 @@ plait_world_def plait_default_world_def(void)
 	return def;
 }
 
-static bool finite3(plait_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+static bool finite3(plait_vec3 v)
+{
+	return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
+}
 
 static plait_result validate_world_def(const plait_world_def *def, plait_error *error)
 {
@@ -40,7 +43,8 @@ static plait_result validate_world_def(const plait_world_def *def, plait_error *
 		                       "world def was not initialised with plait_default_world_def()");
 	}
 	if (!(def->fps > 0.0f) || !isfinite(def->fps)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "fps must be > 0, got %g", (double)def->fps);
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "fps must be > 0, got %g",
+		                       (double)def->fps);
 	}
 	if (def->substeps < 1 || def->substeps > 1000) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "substeps must be in 1..1000, got %d",
@@ -59,7 +63,8 @@ static plait_result validate_world_def(const plait_world_def *def, plait_error *
 		                       (double)def->air_density);
 	}
 	if (!(def->wind.speed >= 0.0f) || !isfinite(def->wind.speed) || !finite3(def->wind.direction)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "wind speed must be >= 0 and direction finite");
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "wind speed must be >= 0 and direction finite");
 	}
 	if (!(def->wind.noise >= 0.0f && def->wind.noise <= 10.0f)) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "wind noise must be in 0..10, got %g",
@@ -74,7 +79,8 @@ static plait_result validate_world_def(const plait_world_def *def, plait_error *
 		                       (double)def->time_scale);
 	}
 	if ((def->alloc == NULL) != (def->free == NULL)) {
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "alloc and free hooks must be set together");
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "alloc and free hooks must be set together");
 	}
 	return PLAIT_OK;
 }
@@ -89,7 +95,8 @@ static void apply_settings(plait_world *world)
 	s->space_scale = def->space_scale;
 	s->substeps = def->substeps;
 	s->max_collision_iterations = def->max_collision_iterations;
-	s->gravity = (vec3){def->gravity.x * inverse_scale, def->gravity.y * inverse_scale, def->gravity.z * inverse_scale};
+	s->gravity = (vec3){def->gravity.x * inverse_scale, def->gravity.y * inverse_scale,
+	                    def->gravity.z * inverse_scale};
 	s->air_density = def->air_density;
 	vec3 direction = v3_normalize(def->wind.direction);
 	s->wind_velocity = v3_scale(direction, def->wind.speed * inverse_scale);
@@ -119,7 +126,10 @@ plait_world_id plait_create_world(const plait_world_def *def, plait_error *error
 	return id;
 }
 
-static plait_world *resolve_world(plait_world_id id) { return id.world; }
+static plait_world *resolve_world(plait_world_id id)
+{
+	return id.world;
+}
 
 void plait_destroy_world(plait_world_id id)
 {
@@ -137,7 +147,10 @@ void plait_destroy_world(plait_world_id id)
 	plait_free(&allocator, world);
 }
 
-bool plait_world_is_valid(plait_world_id id) { return id.world != NULL; }
+bool plait_world_is_valid(plait_world_id id)
+{
+	return id.world != NULL;
+}
 
 plait_result plait_world_set_def(plait_world_id id, const plait_world_def *def, plait_error *error)
 {

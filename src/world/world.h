@@ -15,7 +15,7 @@ typedef struct plait_object {
 	char name[PLAIT_MAX_NAME];
 	int first_particle, particle_count;
 	int material;
-	int collider; /* index into sim.colliders, or -1 */
+	int collider;            /* index into sim.colliders, or -1 */
 	plait_topology topology; /* cloth only */
 	int importance[PLAIT_KIND_COUNT];
 } plait_object;
