@@ -28,6 +28,22 @@ static float combined_friction(float a, float b)
 	return friction > 1.0f ? 1.0f : friction;
 }
 
+/* The move that resolves a contact: out along the normal by depth, and Coulomb friction on the
+ * tangential part of the substep's relative motion: all of it removed while it is within
+ * friction times the normal correction (static), that much of it otherwise (sliding). */
+static vec3 contact_correction(vec3 normal, float depth, vec3 motion, float friction)
+{
+	vec3 correction = v3_scale(normal, depth);
+	vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
+	float tangential_length = v3_length(tangential);
+	if (tangential_length > 0.0f && friction > 0.0f) {
+		float limit = friction * depth;
+		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
+		correction = v3_mul_add(correction, -removed, tangential);
+	}
+	return correction;
+}
+
 /* Whether particles of materials a and b collide as a pair. Vertices of one cloth or curve do
  * not collide with each other here: self-collision of meshes works on their triangles. */
 static bool materials_pair_up(const plait_material *a, const plait_material *b)
@@ -173,18 +189,9 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 			record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
 			continue;
 		}
-		vec3 corrected = v3_mul_add(p1, depth, normal);
-		/* Coulomb friction on the substep's tangential displacement relative to the collider. */
-		vec3 motion = v3_sub(p1, p0);
-		vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
-		float tangential_length = v3_length(tangential);
 		float friction = combined_friction(mat->friction, c->friction);
-		if (tangential_length > 0.0f && friction > 0.0f) {
-			float limit = friction * depth;
-			float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
-			corrected = v3_mul_add(corrected, -removed, tangential);
-		}
-		p->x[i] = plait_rigid_apply(r1, corrected);
+		vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
+		p->x[i] = plait_rigid_apply(r1, v3_add(p1, correction));
 		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
 		++contacts;
 	}
@@ -243,17 +250,8 @@ static int collide_pair(plait_sim *sim, int i, int j)
 	const plait_material *mi = &sim->materials[p->material[i]];
 	const plait_material *mj = &sim->materials[p->material[j]];
 	float wi = p->w[i] / w_sum, wj = p->w[j] / w_sum;
-	vec3 correction = v3_scale(normal, depth);
-	/* Friction on the relative tangential displacement of the substep. */
-	vec3 motion = v3_sub(d1, d0);
-	vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
-	float tangential_length = v3_length(tangential);
-	float friction = combined_friction(mi->friction, mj->friction);
-	if (tangential_length > 0.0f && friction > 0.0f) {
-		float limit = friction * depth;
-		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
-		correction = v3_mul_add(correction, -removed, tangential);
-	}
+	vec3 correction =
+	    contact_correction(normal, depth, v3_sub(d1, d0), combined_friction(mi->friction, mj->friction));
 	p->x[i] = v3_mul_add(p->x[i], -wi, correction);
 	p->x[j] = v3_mul_add(p->x[j], wj, correction);
 
