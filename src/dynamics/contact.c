@@ -325,33 +325,41 @@ static int collide_particle_pairs(plait_sim *sim)
 	if (count < 2 || !(max_radius > 0.0f)) {
 		return 0;
 	}
-	/* Cells as wide as the largest particle: a resting particle touches up to 8 of them, a
-	 * moving one the cells its path sweeps. */
-	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper,
-	                               count, 2.0f * max_radius) ||
+	/* Cells as wide as the largest box: boxes that overlap have their centres in the same or
+	 * neighbouring cells. */
+	float cell = 2.0f * max_radius;
+	for (int k = 0; k < count; ++k) {
+		vec3 extent = v3_sub(sim->pair_upper[k], sim->pair_lower[k]);
+		cell = plait_maxf(cell, plait_maxf(extent.x, plait_maxf(extent.y, extent.z)));
+	}
+	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper, count,
+	                               cell) ||
 	    !ensure_pair_contacts(sim)) {
 		return 0;
 	}
 	int contacts = 0;
-	for (int b = 0; b < hash->table_size; ++b) {
-		int first = hash->bucket_start[b], last = hash->bucket_start[b + 1];
-		for (int e = first; e < last; ++e) {
-			const plait_hash_entry *a = &hash->entries[e];
-			const plait_material *ma = &sim->materials[p->material[a->particle]];
-			for (int f = e + 1; f < last; ++f) {
+	for (int e = 0; e < hash->entry_count; ++e) {
+		const plait_hash_entry *a = &hash->entries[e];
+		const plait_material *ma = &sim->materials[p->material[a->particle]];
+		const vec3 *la = &sim->pair_lower[a->slot], *ua = &sim->pair_upper[a->slot];
+		/* The own cell (later entries only), then the 13 cells after it: each pair once. */
+		for (int n = -1; n < 13; ++n) {
+			plait_hash_cell key = a->cell;
+			if (n >= 0) {
+				key.x += plait_hash_forward_neighbours[n].x;
+				key.y += plait_hash_forward_neighbours[n].y;
+				key.z += plait_hash_forward_neighbours[n].z;
+			}
+			int b = plait_particle_hash_bucket(hash, key);
+			int first = n < 0 ? e + 1 : hash->bucket_start[b];
+			for (int f = first; f < hash->bucket_start[b + 1]; ++f) {
 				const plait_hash_entry *c = &hash->entries[f];
-				if (c->cell.x != a->cell.x || c->cell.y != a->cell.y || c->cell.z != a->cell.z) {
+				if (c->cell.x != key.x || c->cell.y != key.y || c->cell.z != key.z) {
 					continue;
 				}
-				if (!plait_particle_hash_owns_pair(a, c) ||
-				    !materials_pair_up(ma, &sim->materials[p->material[c->particle]])) {
-					continue;
-				}
-				/* Boxes must overlap before the exact swept test. */
-				const vec3 *la = &sim->pair_lower[a->slot], *ua = &sim->pair_upper[a->slot];
 				const vec3 *lc = &sim->pair_lower[c->slot], *uc = &sim->pair_upper[c->slot];
 				if (la->x > uc->x || lc->x > ua->x || la->y > uc->y || lc->y > ua->y || la->z > uc->z ||
-				    lc->z > ua->z) {
+				    lc->z > ua->z || !materials_pair_up(ma, &sim->materials[p->material[c->particle]])) {
 					continue;
 				}
 				int i = a->particle < c->particle ? a->particle : c->particle;
