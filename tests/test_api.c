@@ -85,7 +85,7 @@ Test(api, object_errors_name_the_object_and_field)
 	ASSERT_MESSAGE(error, "collider 'ball': a sphere needs");
 	sphere.shape = PLAIT_SHAPE_MESH;
 	cr_assert(plait_object_id_is_null(plait_create_collider(world, &sphere, &error)));
-	ASSERT_MESSAGE(error, "not supported yet");
+	ASSERT_MESSAGE(error, "a mesh collider needs vertices and faces");
 
 	plait_curve_def curve = plait_default_curve_def();
 	plait_vec3 one = {0, 0, 0};

@@ -188,16 +188,15 @@ Test(scene_errors, missing_scene_file)
 
 Test(scene_errors, unknown_shape)
 {
-	expect_message("{\"objects\": [{\"type\": \"collider\", \"shape\": \"cube\"}]}",
-	               "scene.json: objects[0].shape: expected one of plane, sphere, capsule, box, got \"cube\"");
+	expect_message(
+	    "{\"objects\": [{\"type\": \"collider\", \"shape\": \"cube\"}]}",
+	    "scene.json: objects[0].shape: expected one of plane, sphere, capsule, box, mesh, got \"cube\"");
 }
 
-Test(scene_errors, mesh_collider_not_supported_yet)
+Test(scene_errors, mesh_collider_needs_a_mesh_file)
 {
-	expect_message(
-	    "{\"objects\": [{\"type\": \"collider\", \"shape\": \"mesh\"}]}",
-	    "scene.json: objects[0].shape: mesh colliders are not supported yet (use plane, sphere, capsule "
-	    "or box)");
+	expect_message("{\"objects\": [{\"type\": \"collider\", \"shape\": \"mesh\"}]}",
+	               "scene.json: objects[0]: a mesh collider needs \"mesh\": the path of a mesh file");
 }
 
 Test(scene_errors, shape_key_of_another_shape)

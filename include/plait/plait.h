@@ -246,7 +246,7 @@ typedef enum plait_shape_type {
 	PLAIT_SHAPE_SPHERE,
 	PLAIT_SHAPE_CAPSULE,
 	PLAIT_SHAPE_BOX,
-	PLAIT_SHAPE_MESH, /* triangle meshes: next issue */
+	PLAIT_SHAPE_MESH, /* a triangle mesh (polygons are fanned), rigid, moved by its transform */
 } plait_shape_type;
 
 /* A rigid transform as users write it: translate, then rotation in degrees about x, then y,
@@ -266,6 +266,7 @@ typedef struct plait_collider_def {
 	plait_vec3 a, b;           /* capsule segment ends */
 	plait_vec3 size;           /* box: full extents */
 	plait_vec3 rotation_deg;   /* box: orientation */
+	plait_mesh_def mesh;       /* mesh: vertices and faces in the collider's own space */
 	plait_transform transform; /* initial keyframe transform (identity) */
 	plait_surface_def surface;
 } plait_collider_def;

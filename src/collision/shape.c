@@ -72,6 +72,9 @@ float plait_shape_distance(const plait_shape *shape, vec3 p, vec3 *normal)
 	case PLAIT_SHAPE_BOX:
 		return box_distance(shape, p, normal);
 	case PLAIT_SHAPE_MESH:
+		if (shape->mesh != NULL) {
+			return plait_mesh_shape_distance(shape->mesh, p, normal);
+		}
 		break;
 	}
 	*normal = v3(0.0f, 1.0f, 0.0f);
@@ -111,6 +114,13 @@ bool plait_shape_bounds(const plait_shape *shape, vec3 *lower, vec3 *upper)
 		*upper = v3_add(shape->center, extent);
 		return true;
 	}
+	case PLAIT_SHAPE_MESH:
+		if (shape->mesh == NULL || shape->mesh->node_count == 0) {
+			return false;
+		}
+		*lower = shape->mesh->nodes[0].lower;
+		*upper = shape->mesh->nodes[0].upper;
+		return true;
 	default:
 		return false;
 	}

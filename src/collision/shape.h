@@ -5,16 +5,18 @@
 #ifndef PLAIT_COLLISION_SHAPE_H
 #define PLAIT_COLLISION_SHAPE_H
 
+#include "collision/mesh_shape.h"
 #include "core/math.h"
 
 typedef struct plait_shape {
 	plait_shape_type type;
-	vec3 point, normal; /* plane */
-	vec3 center;        /* sphere, box */
-	float radius;       /* sphere, capsule */
-	vec3 a, b;          /* capsule */
-	vec3 half_extents;  /* box */
-	mat3 rotation;      /* box orientation: box space -> shape space */
+	vec3 point, normal;     /* plane */
+	vec3 center;            /* sphere, box */
+	float radius;           /* sphere, capsule */
+	vec3 a, b;              /* capsule */
+	vec3 half_extents;      /* box */
+	mat3 rotation;          /* box orientation: box space -> shape space */
+	plait_mesh_shape *mesh; /* mesh colliders: owned by the collider */
 } plait_shape;
 
 /* Rigid transform with uniform scale: world = translate + scale * rotation * shape. */
@@ -50,7 +52,8 @@ float plait_shape_distance(const plait_shape *shape, vec3 p, vec3 *normal);
 bool plait_shape_bounds(const plait_shape *shape, vec3 *lower, vec3 *upper);
 
 /* First time t in [0, 1] at which the point p0 + t (p1 - p0) comes within radius of the
- * surface, found by conservative advancement: every step is at most the distance to the
+ * surface (analytic shapes; meshes are handled triangle by triangle in dynamics/contact.c),
+ * found by conservative advancement: every step is at most the distance to the
  * surface, so a step can never cross it. Returns false when the whole path stays farther than
  * radius. When the path starts inside (distance < radius) the hit is at t = 0. */
 bool plait_shape_sweep(const plait_shape *shape, vec3 p0, vec3 p1, float radius, float *toi);

@@ -2,6 +2,8 @@
 
 #include <string.h>
 
+#include "collision/ccd.h"
+#include "collision/mesh_shape.h"
 #include "collision/particle_hash.h"
 
 static plait_transform lerp_transform(plait_transform a, plait_transform b, float t)
@@ -28,20 +30,24 @@ static float combined_friction(float a, float b)
 	return friction > 1.0f ? 1.0f : friction;
 }
 
-/* The move that resolves a contact: out along the normal by depth, and Coulomb friction on the
- * tangential part of the substep's relative motion: all of it removed while it is within
- * friction times the normal correction (static), that much of it otherwise (sliding). */
-static vec3 contact_correction(vec3 normal, float depth, vec3 motion, float friction)
+/* Coulomb friction on a contact: the tangential part of the substep's relative motion is
+ * removed entirely while it is within `limit` (friction times the normal push: static), and by
+ * `limit` otherwise (sliding). Returns the move to add. */
+static vec3 friction_correction(vec3 motion, vec3 normal, float limit)
 {
-	vec3 correction = v3_scale(normal, depth);
 	vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
 	float tangential_length = v3_length(tangential);
-	if (tangential_length > 0.0f && friction > 0.0f) {
-		float limit = friction * depth;
-		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
-		correction = v3_mul_add(correction, -removed, tangential);
+	if (!(tangential_length > 0.0f) || !(limit > 0.0f)) {
+		return v3(0.0f, 0.0f, 0.0f);
 	}
-	return correction;
+	float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
+	return v3_scale(tangential, -removed);
+}
+
+/* The move that resolves a contact: out along the normal by depth, plus friction. */
+static vec3 contact_correction(vec3 normal, float depth, vec3 motion, float friction)
+{
+	return v3_add(v3_scale(normal, depth), friction_correction(motion, normal, friction * depth));
 }
 
 /* Whether particles of materials a and b collide as a pair. Vertices of one cloth or curve do
@@ -116,6 +122,119 @@ static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3
 	p->contact_stickiness[i] = stickiness;
 }
 
+/* Candidate triangles for one particle's path: enough for any sane mesh density; past it the
+ * nearest ones found first are used. */
+#define MESH_CANDIDATES 64
+
+/* One particle against a mesh collider, in the collider's space (where the mesh stands
+ * still). A path shorter than the contact radius cannot pass through a triangle without ending
+ * within the radius of it, so a proximity test at the end suffices; a longer one is swept with
+ * the continuous vertex-triangle test (collision/ccd.h), which never misses a contact. Returns
+ * true when the particle was moved; *p1 is updated in shape space. */
+static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 *p1, float radius,
+                                    float friction, vec3 *contact_normal)
+{
+	vec3 grow = {radius, radius, radius};
+	vec3 lower = v3_sub(v3_min(p0, *p1), grow), upper = v3_add(v3_max(p0, *p1), grow);
+	int candidates[MESH_CANDIDATES];
+	int found = plait_mesh_shape_query(mesh, lower, upper, candidates, MESH_CANDIDATES);
+	if (found == 0) {
+		return false;
+	}
+	found = found < MESH_CANDIDATES ? found : MESH_CANDIDATES;
+	vec3 motion = v3_sub(*p1, p0);
+	bool moved = false;
+	float total_depth = 0.0f;
+	vec3 deepest_normal = {0.0f, 0.0f, 0.0f};
+	float deepest = 0.0f;
+	if (v3_length(motion) >= radius) {
+		/* Fast: the earliest contact along the path, then keep the end on the contact's side. */
+		float first_toi = 2.0f;
+		int first_triangle = -1;
+		for (int k = 0; k < found; ++k) {
+			const int *tri = mesh->triangles[candidates[k]];
+			plait_ccd_motion_float m;
+			vec3 points[4] = {p0, mesh->positions[tri[0]], mesh->positions[tri[1]], mesh->positions[tri[2]]};
+			for (int q = 0; q < 4; ++q) {
+				vec3 end = q == 0 ? *p1 : points[q];
+				m.start[q][0] = points[q].x;
+				m.start[q][1] = points[q].y;
+				m.start[q][2] = points[q].z;
+				m.end[q][0] = end.x;
+				m.end[q][1] = end.y;
+				m.end[q][2] = end.z;
+			}
+			float toi;
+			if (plait_ccd_vertex_face_float(&m, radius, 1e-4f, first_toi < 1.0f ? first_toi : 1.0f, &toi) &&
+			    toi < first_toi) {
+				first_toi = toi;
+				first_triangle = candidates[k];
+			}
+		}
+		if (first_triangle >= 0) {
+			const int *tri = mesh->triangles[first_triangle];
+			vec3 at = v3_lerp(p0, *p1, first_toi);
+			int region;
+			vec3 q = plait_closest_point_on_triangle(at, mesh->positions[tri[0]], mesh->positions[tri[1]],
+			                                         mesh->positions[tri[2]], &region);
+			vec3 n = v3_sub(at, q);
+			float length = v3_length(n);
+			vec3 face = mesh->normals[first_triangle];
+			n = length > 1e-6f * radius ? v3_scale(n, 1.0f / length)
+			                            : (v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face));
+			float depth = radius - v3_dot(v3_sub(*p1, q), n);
+			if (depth > 0.0f) {
+				*p1 = v3_mul_add(*p1, depth, n);
+				total_depth += depth;
+				deepest = depth;
+				deepest_normal = n;
+				moved = true;
+			}
+		}
+	}
+	/* Proximity at the end: push out of every triangle within the radius, on the side the path
+	 * came from when the nearest point is inside a face (a thin sheet has two sides). */
+	for (int k = 0; k < found; ++k) {
+		int t = candidates[k];
+		const int *tri = mesh->triangles[t];
+		int region;
+		vec3 q = plait_closest_point_on_triangle(*p1, mesh->positions[tri[0]], mesh->positions[tri[1]],
+		                                         mesh->positions[tri[2]], &region);
+		vec3 face = mesh->normals[t];
+		vec3 n;
+		float distance;
+		if (region == 0 && v3_length_sq(face) > 0.0f) {
+			n = v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face);
+			distance = v3_dot(v3_sub(*p1, q), n);
+		} else {
+			vec3 d = v3_sub(*p1, q);
+			distance = v3_length(d);
+			if (distance >= radius) {
+				continue;
+			}
+			n = distance > 1e-6f * radius ? v3_scale(d, 1.0f / distance)
+			                              : (v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face));
+		}
+		float depth = radius - distance;
+		if (depth <= 0.0f) {
+			continue;
+		}
+		*p1 = v3_mul_add(*p1, depth, n);
+		total_depth += depth;
+		if (depth > deepest) {
+			deepest = depth;
+			deepest_normal = n;
+		}
+		moved = true;
+	}
+	if (moved) {
+		/* Friction once, against the deepest contact, on the whole normal push. */
+		*p1 = v3_add(*p1, friction_correction(v3_sub(*p1, p0), deepest_normal, friction * total_depth));
+		*contact_normal = deepest_normal;
+	}
+	return moved;
+}
+
 static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 {
 	plait_particles *p = &sim->particles;
@@ -163,6 +282,20 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		vec3 p0 = plait_rigid_apply_inverse(r0, p->x_prev[i]);
 		vec3 p1 = plait_rigid_apply_inverse(r1, p->x[i]);
 		float radius = (p->radius[i] + c->thickness) * inverse_scale;
+		if (c->shape.type == PLAIT_SHAPE_MESH) {
+			vec3 normal;
+			float friction = combined_friction(mat->friction, c->friction);
+			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, &normal)) {
+				vec3 surface_velocity =
+				    v3_scale(v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, p1)), inverse_h);
+				p->x[i] = plait_rigid_apply(r1, p1);
+				record_collider_contact(p, i, plait_rigid_rotate(r1, normal), surface_velocity,
+				                        0.5f * (mat->bounce + c->bounce),
+				                        0.5f * (mat->stickiness + c->stickiness));
+				++contacts;
+			}
+			continue;
+		}
 		float toi;
 		if (!plait_shape_sweep(&c->shape, p0, p1, radius, &toi)) {
 			continue;
@@ -332,8 +465,8 @@ static int collide_particle_pairs(plait_sim *sim)
 		vec3 extent = v3_sub(sim->pair_upper[k], sim->pair_lower[k]);
 		cell = plait_maxf(cell, plait_maxf(extent.x, plait_maxf(extent.y, extent.z)));
 	}
-	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper, count,
-	                               cell) ||
+	if (!plait_particle_hash_build(hash, &sim->allocator, sim->pair_list, sim->pair_lower, sim->pair_upper,
+	                               count, cell) ||
 	    !ensure_pair_contacts(sim)) {
 		return 0;
 	}

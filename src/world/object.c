@@ -659,8 +659,7 @@ static plait_result build_shape(const plait_collider_def *def, const char *label
 		shape->rotation = m3_from_euler_deg(def->rotation_deg);
 		return PLAIT_OK;
 	case PLAIT_SHAPE_MESH:
-		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
-		                       "%s: triangle-mesh colliders are not supported yet", label);
+		return PLAIT_OK; /* the mesh is copied and checked when the collider is created */
 	}
 	return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown shape %d", label,
 	                       (int)def->shape);
@@ -694,11 +693,29 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 		return id;
 	}
 	plait_sim *sim = &world->sim;
+	if (def->shape == PLAIT_SHAPE_MESH) {
+		shape.mesh = plait_alloc_zero(&world->allocator, 1, sizeof *shape.mesh);
+		if (shape.mesh == NULL) {
+			plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
+			return id;
+		}
+		if (plait_mesh_shape_build(shape.mesh, &world->allocator, &def->mesh, error) != PLAIT_OK) {
+			char reason[PLAIT_ERROR_MESSAGE_SIZE];
+			snprintf(reason, sizeof reason, "%s", error != NULL ? error->message : "");
+			plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s", label, reason);
+			plait_free(&world->allocator, shape.mesh);
+			return id;
+		}
+	}
 	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_COLLIDER, def->name, &id);
 	bool ok = object != NULL && plait_sim_reserve_colliders(sim, 1) && plait_sim_reserve_materials(sim, 1);
 	if (!ok) {
 		if (object != NULL) {
 			abandon_object(world, object);
+		}
+		if (shape.mesh != NULL) {
+			plait_mesh_shape_destroy(shape.mesh, &world->allocator);
+			plait_free(&world->allocator, shape.mesh);
 		}
 		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
 		return (plait_object_id){0};

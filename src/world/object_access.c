@@ -5,6 +5,15 @@
 #include "dynamics/sim_store.h"
 #include "world/world.h"
 
+void plait_collider_release(plait_world *world, plait_collider *collider)
+{
+	if (collider->shape.mesh != NULL) {
+		plait_mesh_shape_destroy(collider->shape.mesh, &world->allocator);
+		plait_free(&world->allocator, collider->shape.mesh);
+		collider->shape.mesh = NULL;
+	}
+}
+
 void plait_destroy_object(plait_object_id id)
 {
 	plait_object *object = plait_world_resolve(id, NULL);
@@ -32,6 +41,7 @@ void plait_destroy_object(plait_object_id id)
 	}
 	if (object->collider >= 0) {
 		int k = object->collider;
+		plait_collider_release(world, &sim->colliders[k]);
 		memmove(&sim->colliders[k], &sim->colliders[k + 1],
 		        sizeof *sim->colliders * (size_t)(sim->collider_count - k - 1));
 		sim->collider_count -= 1;

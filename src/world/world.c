@@ -140,6 +140,9 @@ void plait_destroy_world(plait_world_id id)
 	for (int k = 0; k < world->object_count; ++k) {
 		plait_topology_destroy(&world->objects[k].topology, &world->allocator);
 	}
+	for (int k = 0; k < world->sim.collider_count; ++k) {
+		plait_collider_release(world, &world->sim.colliders[k]);
+	}
 	plait_free(&world->allocator, world->objects);
 	plait_contacts_destroy(&world->sim);
 	plait_sim_destroy(&world->sim);

@@ -37,6 +37,9 @@ plait_object *plait_world_resolve(plait_object_id id, plait_error *error);
 /* Recomputes kind importance and activity from the live objects; marks the schedule dirty. */
 void plait_world_update_kinds(plait_world *world);
 
+/* Frees what a collider owns (a mesh shape). */
+void plait_collider_release(plait_world *world, plait_collider *collider);
+
 /* A new object slot (alive, next generation); NULL when out of memory. */
 plait_object *plait_world_new_object(plait_world *world, plait_object_type type, const char *name,
                                      plait_object_id *id);

@@ -293,24 +293,29 @@ bool plait_scene_parse_collider(plait_scene_loader *loader, const json_t *json, 
 	plait_scene_reader *r = &loader->reader;
 	static const char *const shapes[] = {"plane", "sphere", "capsule", "box", "mesh"};
 	// The geometry keys each shape takes; the others are mistakes worth reporting.
-	static const char *const shape_keys[4][3] = {{"point", "normal", NULL},
+	static const char *const shape_keys[5][3] = {{"point", "normal", NULL},
 	                                             {"center", "radius", NULL},
 	                                             {"a", "b", "radius"},
-	                                             {"center", "size", "rotation"}};
-	static const char *const all_geometry[] = {"point", "normal", "center", "radius",
-	                                           "a",     "b",      "size",   "rotation"};
+	                                             {"center", "size", "rotation"},
+	                                             {"mesh", NULL, NULL}};
+	static const char *const all_geometry[] = {"point", "normal", "center",   "radius", "a",
+	                                           "b",     "size",   "rotation", "mesh"};
 	size_t old = plait_reader_push_key(r, "shape");
 	int shape;
-	if (!plait_reader_choice(r, json_object_get(json, "shape"), shapes, 4, &shape)) {
-		if (json_is_string(json_object_get(json, "shape")) &&
-		    strcmp(json_string_value(json_object_get(json, "shape")), "mesh") == 0)
-			return plait_reader_fail(
-			    r, "mesh colliders are not supported yet (use plane, sphere, capsule or box)");
+	if (!plait_reader_choice(r, json_object_get(json, "shape"), shapes, 5, &shape))
 		return false;
-	}
 	plait_reader_pop(r, old);
 	object->collider.shape = (plait_shape_type)shape;
-	for (int i = 0; i < 8; ++i) {
+	if (shape == PLAIT_SHAPE_MESH) {
+		const json_t *mesh = json_object_get(json, "mesh");
+		if (mesh == NULL)
+			return plait_reader_fail(r, "a mesh collider needs \"mesh\": the path of a mesh file");
+		size_t at = plait_reader_push_key(r, "mesh");
+		if (!plait_parse_mesh(loader, mesh, object))
+			return false;
+		plait_reader_pop(r, at);
+	}
+	for (int i = 0; i < 9; ++i) {
 		if (json_object_get(json, all_geometry[i]) == NULL)
 			continue;
 		bool used = false;

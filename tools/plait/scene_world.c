@@ -40,6 +40,10 @@ static plait_object_id plait_scene_create_object(plait_world_id world, const pla
 	case PLAIT_OBJECT_COLLIDER: {
 		plait_collider_def def = object->collider;
 		def.name = object->name;
+		if (def.shape == PLAIT_SHAPE_MESH) {
+			def.mesh = (plait_mesh_def){object->positions, object->vertex_count, object->face_sizes,
+			                            object->face_count, object->face_indices};
+		}
 		return plait_create_collider(world, &def, error);
 	}
 	}

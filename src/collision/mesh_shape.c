@@ -1,0 +1,283 @@
+#include "collision/mesh_shape.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/error.h"
+
+#define LEAF_SIZE 4
+
+void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *allocator)
+{
+	plait_free(allocator, shape->positions);
+	plait_free(allocator, shape->triangles);
+	plait_free(allocator, shape->normals);
+	plait_free(allocator, shape->nodes);
+	plait_free(allocator, shape->triangle_order);
+	memset(shape, 0, sizeof *shape);
+}
+
+typedef struct build_context {
+	plait_mesh_shape *shape;
+	vec3 *centroid;
+	int axis; /* for the comparison */
+} build_context;
+
+static void triangle_bounds(const plait_mesh_shape *shape, int t, vec3 *lower, vec3 *upper)
+{
+	const int *tri = shape->triangles[t];
+	*lower = v3_min(shape->positions[tri[0]], v3_min(shape->positions[tri[1]], shape->positions[tri[2]]));
+	*upper = v3_max(shape->positions[tri[0]], v3_max(shape->positions[tri[1]], shape->positions[tri[2]]));
+}
+
+static float axis_value(vec3 v, int axis)
+{
+	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
+}
+
+/* Sorts order[first, first + count) by centroid along axis: insertion-free, deterministic
+ * (ties by triangle index). */
+static void sort_by_axis(int *order, int count, const vec3 *centroid, int axis, int *scratch)
+{
+	/* Bottom-up merge sort: qsort needs global state for the axis, and must be stable here. */
+	for (int width = 1; width < count; width *= 2) {
+		for (int start = 0; start < count; start += 2 * width) {
+			int middle = start + width < count ? start + width : count;
+			int end = start + 2 * width < count ? start + 2 * width : count;
+			int i = start, j = middle, k = start;
+			while (i < middle && j < end) {
+				float a = axis_value(centroid[order[i]], axis), b = axis_value(centroid[order[j]], axis);
+				scratch[k++] = (b < a || (b == a && order[j] < order[i])) ? order[j++] : order[i++];
+			}
+			while (i < middle) {
+				scratch[k++] = order[i++];
+			}
+			while (j < end) {
+				scratch[k++] = order[j++];
+			}
+		}
+		memcpy(order, scratch, sizeof(int) * (size_t)count);
+	}
+}
+
+/* Builds the node at index `node` over order[first, first + count); returns the next free node. */
+static int build_node(plait_mesh_shape *shape, const vec3 *centroid, int *scratch, int node, int first,
+                      int count, int next_free)
+{
+	plait_bvh_node *n = &shape->nodes[node];
+	vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
+	vec3 c_lower = lower, c_upper = upper;
+	for (int k = first; k < first + count; ++k) {
+		vec3 tl, tu;
+		triangle_bounds(shape, shape->triangle_order[k], &tl, &tu);
+		lower = v3_min(lower, tl);
+		upper = v3_max(upper, tu);
+		c_lower = v3_min(c_lower, centroid[shape->triangle_order[k]]);
+		c_upper = v3_max(c_upper, centroid[shape->triangle_order[k]]);
+	}
+	n->lower = lower;
+	n->upper = upper;
+	if (count <= LEAF_SIZE) {
+		n->first = first;
+		n->count = count;
+		return next_free;
+	}
+	vec3 extent = v3_sub(c_upper, c_lower);
+	int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+	sort_by_axis(shape->triangle_order + first, count, centroid, axis, scratch);
+	int half = count / 2;
+	int left = next_free;
+	n->first = left;
+	n->count = 0;
+	next_free += 2;
+	next_free = build_node(shape, centroid, scratch, left, first, half, next_free);
+	return build_node(shape, centroid, scratch, left + 1, first + half, count - half, next_free);
+}
+
+plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocator *allocator,
+                                    const plait_mesh_def *mesh, plait_error *error)
+{
+	memset(shape, 0, sizeof *shape);
+	if (mesh->vertex_count < 3 || mesh->face_count < 1 || mesh->positions == NULL ||
+	    mesh->face_sizes == NULL || mesh->face_indices == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "a mesh collider needs vertices and faces");
+	}
+	int triangles = 0, index = 0;
+	for (int f = 0; f < mesh->face_count; ++f) {
+		int size = mesh->face_sizes[f];
+		if (size < 3) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH,
+			                       "face %d has %d vertices; a face needs at least 3", f, size);
+		}
+		for (int k = 0; k < size; ++k) {
+			int v = mesh->face_indices[index + k];
+			if (v < 0 || v >= mesh->vertex_count) {
+				return plait_error_set(error, PLAIT_ERROR_INVALID_MESH,
+				                       "face %d uses vertex index %d, outside 0..%d", f, v,
+				                       mesh->vertex_count - 1);
+			}
+		}
+		index += size;
+		triangles += size - 2;
+	}
+	for (int v = 0; v < mesh->vertex_count; ++v) {
+		if (!v3_is_finite(mesh->positions[v])) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "mesh vertex %d is not finite", v);
+		}
+	}
+	shape->vertex_count = mesh->vertex_count;
+	shape->triangle_count = triangles;
+	shape->node_count = 2 * triangles; /* a binary tree with leaves of >= 1 triangle */
+	shape->positions = plait_alloc(allocator, sizeof(vec3) * (size_t)mesh->vertex_count);
+	shape->triangles = plait_alloc(allocator, sizeof *shape->triangles * (size_t)triangles);
+	shape->normals = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
+	shape->nodes = plait_alloc_zero(allocator, (size_t)shape->node_count, sizeof *shape->nodes);
+	shape->triangle_order = plait_alloc(allocator, sizeof(int) * (size_t)triangles);
+	vec3 *centroid = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
+	int *scratch = plait_alloc(allocator, sizeof(int) * (size_t)triangles);
+	if (!shape->positions || !shape->triangles || !shape->normals || !shape->nodes ||
+	    !shape->triangle_order || !centroid || !scratch) {
+		plait_free(allocator, centroid);
+		plait_free(allocator, scratch);
+		plait_mesh_shape_destroy(shape, allocator);
+		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building a mesh collider");
+	}
+	memcpy(shape->positions, mesh->positions, sizeof(vec3) * (size_t)mesh->vertex_count);
+	int t = 0;
+	index = 0;
+	for (int f = 0; f < mesh->face_count; ++f) {
+		const int *face = mesh->face_indices + index;
+		for (int k = 1; k + 1 < mesh->face_sizes[f]; ++k, ++t) {
+			int tri[3] = {face[0], face[k], face[k + 1]};
+			memcpy(shape->triangles[t], tri, sizeof tri);
+			vec3 a = shape->positions[tri[0]], b = shape->positions[tri[1]], c = shape->positions[tri[2]];
+			shape->normals[t] = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+			centroid[t] = v3_scale(v3_add(v3_add(a, b), c), 1.0f / 3.0f);
+			shape->triangle_order[t] = t;
+		}
+		index += mesh->face_sizes[f];
+	}
+	int used = build_node(shape, centroid, scratch, 0, 0, triangles, 1);
+	shape->node_count = used;
+	plait_free(allocator, centroid);
+	plait_free(allocator, scratch);
+	return PLAIT_OK;
+}
+
+static bool boxes_overlap(vec3 al, vec3 au, vec3 bl, vec3 bu)
+{
+	return al.x <= bu.x && bl.x <= au.x && al.y <= bu.y && bl.y <= au.y && al.z <= bu.z && bl.z <= au.z;
+}
+
+int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
+                           int capacity)
+{
+	int stack[64], depth = 0, found = 0;
+	stack[depth++] = 0;
+	while (depth > 0) {
+		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
+		if (!boxes_overlap(n->lower, n->upper, lower, upper)) {
+			continue;
+		}
+		if (n->count > 0) {
+			for (int k = n->first; k < n->first + n->count; ++k) {
+				int t = shape->triangle_order[k];
+				vec3 tl, tu;
+				triangle_bounds(shape, t, &tl, &tu);
+				if (boxes_overlap(tl, tu, lower, upper)) {
+					if (found < capacity) {
+						triangles[found] = t;
+					}
+					++found;
+				}
+			}
+		} else if (depth + 2 <= 64) {
+			stack[depth++] = n->first + 1;
+			stack[depth++] = n->first;
+		}
+	}
+	return found;
+}
+
+vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region)
+{
+	/* Voronoi regions of the corners, then of the edges, else the face (Ericson, RTCD 5.1.5). */
+	vec3 ab = v3_sub(b, a), ac = v3_sub(c, a), ap = v3_sub(p, a);
+	float d1 = v3_dot(ab, ap), d2 = v3_dot(ac, ap);
+	*region = 1;
+	if (d1 <= 0.0f && d2 <= 0.0f) {
+		return a;
+	}
+	vec3 bp = v3_sub(p, b);
+	float d3 = v3_dot(ab, bp), d4 = v3_dot(ac, bp);
+	if (d3 >= 0.0f && d4 <= d3) {
+		return b;
+	}
+	float vc = d1 * d4 - d3 * d2;
+	if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
+		return v3_mul_add(a, d1 / (d1 - d3), ab);
+	}
+	vec3 cp = v3_sub(p, c);
+	float d5 = v3_dot(ab, cp), d6 = v3_dot(ac, cp);
+	if (d6 >= 0.0f && d5 <= d6) {
+		return c;
+	}
+	float vb = d5 * d2 - d1 * d6;
+	if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
+		return v3_mul_add(a, d2 / (d2 - d6), ac);
+	}
+	float va = d3 * d6 - d5 * d4;
+	if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
+		return v3_mul_add(b, (d4 - d3) / ((d4 - d3) + (d5 - d6)), v3_sub(c, b));
+	}
+	float denominator = va + vb + vc;
+	if (!(denominator > 0.0f)) {
+		return a; /* degenerate triangle */
+	}
+	*region = 0;
+	float v = vb / denominator, w = vc / denominator;
+	return v3_add(a, v3_add(v3_scale(ab, v), v3_scale(ac, w)));
+}
+
+float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *normal)
+{
+	/* Branch and bound over the hierarchy: nearest triangle first by box distance. */
+	float best_sq = INFINITY;
+	int best = -1;
+	vec3 best_point = p;
+	int stack[64], depth = 0;
+	stack[depth++] = 0;
+	while (depth > 0) {
+		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
+		vec3 clamped = v3_max(n->lower, v3_min(p, n->upper));
+		if (v3_length_sq(v3_sub(clamped, p)) >= best_sq) {
+			continue;
+		}
+		if (n->count > 0) {
+			for (int k = n->first; k < n->first + n->count; ++k) {
+				int t = shape->triangle_order[k];
+				const int *tri = shape->triangles[t];
+				int region;
+				vec3 q = plait_closest_point_on_triangle(
+				    p, shape->positions[tri[0]], shape->positions[tri[1]], shape->positions[tri[2]], &region);
+				float d_sq = v3_length_sq(v3_sub(p, q));
+				if (d_sq < best_sq) {
+					best_sq = d_sq;
+					best = t;
+					best_point = q;
+				}
+			}
+		} else if (depth + 2 <= 64) {
+			stack[depth++] = n->first + 1;
+			stack[depth++] = n->first;
+		}
+	}
+	if (best < 0) {
+		*normal = v3(0.0f, 1.0f, 0.0f);
+		return INFINITY;
+	}
+	vec3 n = shape->normals[best];
+	*normal = v3_length_sq(n) > 0.0f ? n : v3(0.0f, 1.0f, 0.0f);
+	float distance = sqrtf(best_sq);
+	return v3_dot(v3_sub(p, best_point), *normal) < 0.0f ? -distance : distance;
+}

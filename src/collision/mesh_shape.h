@@ -1,0 +1,46 @@
+/* Triangle-mesh colliders (nRigid from a mesh): the triangles in the collider's shape space and
+ * a bounding volume hierarchy (axis-aligned boxes) over them. A collider is rigid and moves by
+ * its keyframed transform, so the hierarchy is built once and never refitted: particles are
+ * brought into shape space instead. */
+#ifndef PLAIT_COLLISION_MESH_SHAPE_H
+#define PLAIT_COLLISION_MESH_SHAPE_H
+
+#include "core/alloc.h"
+#include "core/math.h"
+
+typedef struct plait_bvh_node {
+	vec3 lower, upper;
+	int first; /* leaf: first entry in triangle_order; inner: left child (right is left + 1) */
+	int count; /* leaf: triangle count; inner: 0 */
+} plait_bvh_node;
+
+typedef struct plait_mesh_shape {
+	int vertex_count;
+	vec3 *positions;
+	int triangle_count;
+	int (*triangles)[3];
+	vec3 *normals; /* unit normal of each triangle (zero for a degenerate one) */
+	int node_count;
+	plait_bvh_node *nodes;
+	int *triangle_order;
+} plait_mesh_shape;
+
+/* Copies positions and fans the faces into triangles; builds the hierarchy. */
+plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocator *allocator,
+                                    const plait_mesh_def *mesh, plait_error *error);
+void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *allocator);
+
+/* Triangles whose boxes overlap [lower, upper]; writes at most capacity, returns how many
+ * overlap (may exceed capacity). */
+int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
+                           int capacity);
+
+/* The point of triangle (a, b, c) closest to p; *region is 0 inside the face, 1 on an edge or
+ * corner. */
+vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region);
+
+/* Distance from p to the mesh, signed by the nearest triangle's normal (negative behind it),
+ * and that normal (outward when the mesh is closed and consistently oriented). */
+float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *normal);
+
+#endif
