@@ -169,8 +169,8 @@ static bool boxes_overlap(vec3 al, vec3 au, vec3 bl, vec3 bu)
 	return al.x <= bu.x && bl.x <= au.x && al.y <= bu.y && bl.y <= au.y && al.z <= bu.z && bl.z <= au.z;
 }
 
-int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
-                           int capacity)
+static int query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles, int capacity,
+                 bool test_triangles)
 {
 	int stack[64], depth = 0, found = 0;
 	stack[depth++] = 0;
@@ -182,14 +182,17 @@ int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper
 		if (n->count > 0) {
 			for (int k = n->first; k < n->first + n->count; ++k) {
 				int t = shape->triangle_order[k];
-				vec3 tl, tu;
-				triangle_bounds(shape, t, &tl, &tu);
-				if (boxes_overlap(tl, tu, lower, upper)) {
-					if (found < capacity) {
-						triangles[found] = t;
+				if (test_triangles) {
+					vec3 tl, tu;
+					triangle_bounds(shape, t, &tl, &tu);
+					if (!boxes_overlap(tl, tu, lower, upper)) {
+						continue;
 					}
-					++found;
 				}
+				if (found < capacity) {
+					triangles[found] = t;
+				}
+				++found;
 			}
 		} else if (depth + 2 <= 64) {
 			stack[depth++] = n->first + 1;
@@ -199,44 +202,69 @@ int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper
 	return found;
 }
 
-vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region)
+int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
+                           int capacity)
+{
+	return query(shape, lower, upper, triangles, capacity, true);
+}
+
+int plait_mesh_shape_query_leaves(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
+                                  int capacity)
+{
+	return query(shape, lower, upper, triangles, capacity, false);
+}
+
+static vec3 weighted(vec3 a, vec3 b, vec3 c, float wa, float wb, float wc, float weights[3])
+{
+	if (weights != NULL) {
+		weights[0] = wa;
+		weights[1] = wb;
+		weights[2] = wc;
+	}
+	return v3_add(v3_add(v3_scale(a, wa), v3_scale(b, wb)), v3_scale(c, wc));
+}
+
+vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region, float weights[3])
 {
 	/* Voronoi regions of the corners, then of the edges, else the face (Ericson, RTCD 5.1.5). */
 	vec3 ab = v3_sub(b, a), ac = v3_sub(c, a), ap = v3_sub(p, a);
 	float d1 = v3_dot(ab, ap), d2 = v3_dot(ac, ap);
 	*region = 1;
 	if (d1 <= 0.0f && d2 <= 0.0f) {
-		return a;
+		return weighted(a, b, c, 1.0f, 0.0f, 0.0f, weights);
 	}
 	vec3 bp = v3_sub(p, b);
 	float d3 = v3_dot(ab, bp), d4 = v3_dot(ac, bp);
 	if (d3 >= 0.0f && d4 <= d3) {
-		return b;
+		return weighted(a, b, c, 0.0f, 1.0f, 0.0f, weights);
 	}
 	float vc = d1 * d4 - d3 * d2;
 	if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
-		return v3_mul_add(a, d1 / (d1 - d3), ab);
+		float t = d1 / (d1 - d3);
+		return weighted(a, b, c, 1.0f - t, t, 0.0f, weights);
 	}
 	vec3 cp = v3_sub(p, c);
 	float d5 = v3_dot(ab, cp), d6 = v3_dot(ac, cp);
 	if (d6 >= 0.0f && d5 <= d6) {
-		return c;
+		return weighted(a, b, c, 0.0f, 0.0f, 1.0f, weights);
 	}
 	float vb = d5 * d2 - d1 * d6;
 	if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
-		return v3_mul_add(a, d2 / (d2 - d6), ac);
+		float t = d2 / (d2 - d6);
+		return weighted(a, b, c, 1.0f - t, 0.0f, t, weights);
 	}
 	float va = d3 * d6 - d5 * d4;
 	if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
-		return v3_mul_add(b, (d4 - d3) / ((d4 - d3) + (d5 - d6)), v3_sub(c, b));
+		float t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+		return weighted(a, b, c, 0.0f, 1.0f - t, t, weights);
 	}
 	float denominator = va + vb + vc;
 	if (!(denominator > 0.0f)) {
-		return a; /* degenerate triangle */
+		return weighted(a, b, c, 1.0f, 0.0f, 0.0f, weights); /* degenerate triangle */
 	}
 	*region = 0;
 	float v = vb / denominator, w = vc / denominator;
-	return v3_add(a, v3_add(v3_scale(ab, v), v3_scale(ac, w)));
+	return weighted(a, b, c, 1.0f - v - w, v, w, weights);
 }
 
 float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *normal)
@@ -258,8 +286,9 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 				int t = shape->triangle_order[k];
 				const int *tri = shape->triangles[t];
 				int region;
-				vec3 q = plait_closest_point_on_triangle(
-				    p, shape->positions[tri[0]], shape->positions[tri[1]], shape->positions[tri[2]], &region);
+				vec3 q =
+				    plait_closest_point_on_triangle(p, shape->positions[tri[0]], shape->positions[tri[1]],
+				                                    shape->positions[tri[2]], &region, NULL);
 				float d_sq = v3_length_sq(v3_sub(p, q));
 				if (d_sq < best_sq) {
 					best_sq = d_sq;

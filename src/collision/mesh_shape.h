@@ -35,9 +35,14 @@ void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *al
 int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
                            int capacity);
 
+/* The same, testing node boxes only (every triangle of an overlapping leaf): for hierarchies
+ * whose node boxes were refitted to moving vertices while `positions` stay at rest. */
+int plait_mesh_shape_query_leaves(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
+                                  int capacity);
+
 /* The point of triangle (a, b, c) closest to p; *region is 0 inside the face, 1 on an edge or
- * corner. */
-vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region);
+ * corner; weights (may be NULL) receive its barycentric coordinates. */
+vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region, float weights[3]);
 
 /* Distance from p to the mesh, signed by the nearest triangle's normal (negative behind it),
  * and that normal (outward when the mesh is closed and consistently oriented). */

@@ -5,6 +5,7 @@
 #include "collision/ccd.h"
 #include "collision/mesh_shape.h"
 #include "collision/particle_hash.h"
+#include "dynamics/surface_contact.h"
 
 static plait_transform lerp_transform(plait_transform a, plait_transform b, float t)
 {
@@ -66,8 +67,12 @@ static bool materials_pair_up(const plait_material *a, const plait_material *b)
 bool plait_contacts_begin_substep(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
+	/* What touched a collider in the last substep is held by it in this one (see
+	 * surface_contact.c); contacts of this substep start afresh. */
 	for (int i = 0; i < p->count; ++i) {
-		p->flags[i] &= (uint8_t)~PLAIT_PARTICLE_CONTACT;
+		uint8_t flags = p->flags[i] & (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED);
+		p->flags[i] =
+		    (p->flags[i] & PLAIT_PARTICLE_CONTACT) ? (uint8_t)(flags | PLAIT_PARTICLE_SUPPORTED) : flags;
 	}
 	sim->pair_contact_count = 0;
 
@@ -176,7 +181,7 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 			vec3 at = v3_lerp(p0, *p1, first_toi);
 			int region;
 			vec3 q = plait_closest_point_on_triangle(at, mesh->positions[tri[0]], mesh->positions[tri[1]],
-			                                         mesh->positions[tri[2]], &region);
+			                                         mesh->positions[tri[2]], &region, NULL);
 			vec3 n = v3_sub(at, q);
 			float length = v3_length(n);
 			vec3 face = mesh->normals[first_triangle];
@@ -199,7 +204,7 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 		const int *tri = mesh->triangles[t];
 		int region;
 		vec3 q = plait_closest_point_on_triangle(*p1, mesh->positions[tri[0]], mesh->positions[tri[1]],
-		                                         mesh->positions[tri[2]], &region);
+		                                         mesh->positions[tri[2]], &region, NULL);
 		vec3 face = mesh->normals[t];
 		vec3 n;
 		float distance;
@@ -510,10 +515,12 @@ static int collide_particle_pairs(plait_sim *sim)
 void plait_collide(plait_sim *sim)
 {
 	int contacts = 0;
-	/* Particle pairs first, colliders last: a collider is immovable, so it has the last word
-	 * and a pile pressing on the floor cannot push its bottom layer through it. */
+	/* Objects against each other first (particle pairs, then vertices against other objects'
+	 * triangles), colliders last: a collider is immovable, so it has the last word and a pile
+	 * pressing on the floor cannot push its bottom layer through it. */
 	if (sim->particle_pairs_active) {
 		contacts += collide_particle_pairs(sim);
+		contacts += plait_collide_surfaces(sim);
 	}
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {

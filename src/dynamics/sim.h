@@ -12,9 +12,10 @@
 #include "dynamics/schedule.h"
 
 enum {
-	PLAIT_PARTICLE_PINNED = 1,  /* kinematic: follows pin_start -> pin_end over the frame */
-	PLAIT_PARTICLE_COLLIDE = 2, /* takes part in collisions */
-	PLAIT_PARTICLE_CONTACT = 4, /* touched something in the current substep */
+	PLAIT_PARTICLE_PINNED = 1,    /* kinematic: follows pin_start -> pin_end over the frame */
+	PLAIT_PARTICLE_COLLIDE = 2,   /* takes part in collisions */
+	PLAIT_PARTICLE_CONTACT = 4,   /* touched something in the current substep */
+	PLAIT_PARTICLE_SUPPORTED = 8, /* touched a collider in the previous substep */
 };
 
 /* Per-object attributes the solver needs per particle (indexed by particles.material). */
@@ -118,6 +119,15 @@ typedef struct plait_collider {
 	bool collide;
 } plait_collider;
 
+/* A cloth's surface as other objects' vertices see it: its triangles (object-local indices)
+ * with a hierarchy whose boxes are refitted to the particles' swept positions. */
+typedef struct plait_surface {
+	int object;
+	int material;
+	int first; /* first particle of the cloth */
+	struct plait_mesh_shape *shape;
+} plait_surface;
+
 typedef struct plait_particle_contact {
 	int i, j;
 	vec3 normal;          /* from i to j */
@@ -158,6 +168,8 @@ typedef struct plait_sim {
 	plait_aero_block aero;
 	int collider_count, collider_capacity;
 	plait_collider *colliders;
+	int surface_count, surface_capacity;
+	plait_surface *surfaces;
 
 	/* Importance per kind, and whether it has work; the schedule is rebuilt when they change. */
 	int kind_importance[PLAIT_KIND_COUNT];

@@ -95,6 +95,7 @@ void plait_sim_destroy(plait_sim *sim)
 	FREE_FIELD(sim->aero, material);
 	plait_free(&sim->allocator, sim->materials);
 	plait_free(&sim->allocator, sim->colliders);
+	plait_free(&sim->allocator, sim->surfaces); /* their shapes are released by the world */
 	plait_free(&sim->allocator, sim->pair_contacts);
 	plait_free(&sim->allocator, sim->pair_list);
 	plait_free(&sim->allocator, sim->pair_lower);

@@ -18,7 +18,9 @@
 
 #include "core/error.h"
 #include "dynamics/constraints.h"
+#include "collision/mesh_shape.h"
 #include "dynamics/sim_store.h"
+#include "dynamics/surface_contact.h"
 #include "world/tethers.h"
 #include "world/world.h"
 
@@ -422,6 +424,16 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	plait_free(a, polygon_area);
 	plait_free(a, triangle_area);
 	plait_free(a, vertex_area);
+	/* The cloth's surface, for other objects' vertices to collide with. Without memory for it
+	 * the cloth still works; its surface is then felt through its vertices only. */
+	if (def->surface.collide && plait_sim_reserve_surfaces(sim, 1)) {
+		plait_mesh_shape *shape = plait_alloc_zero(a, 1, sizeof *shape);
+		if (shape != NULL && plait_mesh_shape_build(shape, a, mesh, NULL) == PLAIT_OK) {
+			sim->surfaces[sim->surface_count++] = (plait_surface){slot, material, first, shape};
+		} else {
+			plait_free(a, shape);
+		}
+	}
 	/* Should the tethers' scratch memory run out, the cloth still works, untethered. */
 	(void)plait_build_tethers(sim, topology, x, first, def->pins, def->pin_count, def->tethers,
 	                          def->tether_scale, def->tether_stiffness);

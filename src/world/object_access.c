@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "collision/mesh_shape.h"
 #include "dynamics/sim_store.h"
 #include "world/world.h"
 
@@ -38,6 +39,19 @@ void plait_destroy_object(plait_object_id id)
 				other->first_particle -= object->particle_count;
 			}
 		}
+	}
+	/* The cloth's surface goes with it; the others keep pointing at their particles. */
+	for (int k = 0; k < sim->surface_count;) {
+		plait_surface *surface = &sim->surfaces[k];
+		if (surface->object == id.index1 - 1) {
+			plait_mesh_shape_destroy(surface->shape, &world->allocator);
+			plait_free(&world->allocator, surface->shape);
+			memmove(surface, surface + 1, sizeof *surface * (size_t)(sim->surface_count - k - 1));
+			sim->surface_count -= 1;
+			continue;
+		}
+		surface->first = world->objects[surface->object].first_particle;
+		++k;
 	}
 	if (object->collider >= 0) {
 		int k = object->collider;

@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "collision/mesh_shape.h"
 #include "core/error.h"
 #include "dynamics/contact.h"
 #include "dynamics/sim_store.h"
@@ -142,6 +143,10 @@ void plait_destroy_world(plait_world_id id)
 	}
 	for (int k = 0; k < world->sim.collider_count; ++k) {
 		plait_collider_release(world, &world->sim.colliders[k]);
+	}
+	for (int k = 0; k < world->sim.surface_count; ++k) {
+		plait_mesh_shape_destroy(world->sim.surfaces[k].shape, &world->allocator);
+		plait_free(&world->allocator, world->sim.surfaces[k].shape);
 	}
 	plait_free(&world->allocator, world->objects);
 	plait_contacts_destroy(&world->sim);

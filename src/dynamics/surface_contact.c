@@ -1,0 +1,199 @@
+#include "dynamics/surface_contact.h"
+
+#include <string.h>
+
+#include "collision/ccd.h"
+#include "collision/mesh_shape.h"
+
+#define SURFACE_CANDIDATES 64
+
+bool plait_sim_reserve_surfaces(plait_sim *sim, int count)
+{
+	int needed = sim->surface_count + count;
+	if (needed <= sim->surface_capacity) {
+		return true;
+	}
+	int capacity = needed < 8 ? 8 : 2 * needed;
+	plait_surface *bigger = plait_alloc_zero(&sim->allocator, (size_t)capacity, sizeof *bigger);
+	if (bigger == NULL) {
+		return false;
+	}
+	if (sim->surface_count > 0) {
+		memcpy(bigger, sim->surfaces, sizeof *bigger * (size_t)sim->surface_count);
+	}
+	plait_free(&sim->allocator, sim->surfaces);
+	sim->surfaces = bigger;
+	sim->surface_capacity = capacity;
+	return true;
+}
+
+/* Boxes of the hierarchy around the triangles' paths over the substep, grown by `grow`. Nodes
+ * are stored parents before children, so one backward pass refits the tree. */
+static void refit(plait_mesh_shape *shape, const plait_particles *p, int first, float grow)
+{
+	vec3 margin = {grow, grow, grow};
+	for (int n = shape->node_count - 1; n >= 0; --n) {
+		plait_bvh_node *node = &shape->nodes[n];
+		vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
+		if (node->count > 0) {
+			for (int k = node->first; k < node->first + node->count; ++k) {
+				const int *tri = shape->triangles[shape->triangle_order[k]];
+				for (int c = 0; c < 3; ++c) {
+					int i = first + tri[c];
+					lower = v3_min(lower, v3_min(p->x[i], p->x_prev[i]));
+					upper = v3_max(upper, v3_max(p->x[i], p->x_prev[i]));
+				}
+			}
+			lower = v3_sub(lower, margin);
+			upper = v3_add(upper, margin);
+		} else {
+			const plait_bvh_node *left = &shape->nodes[node->first], *right = &shape->nodes[node->first + 1];
+			lower = v3_min(left->lower, right->lower);
+			upper = v3_max(left->upper, right->upper);
+		}
+		node->lower = lower;
+		node->upper = upper;
+	}
+}
+
+static vec3 blend(const vec3 *x, const int *corners, const float *weights)
+{
+	return v3_add(v3_add(v3_scale(x[corners[0]], weights[0]), v3_scale(x[corners[1]], weights[1])),
+	              v3_scale(x[corners[2]], weights[2]));
+}
+
+/* Resolves vertex i against triangle (world indices) corners; returns true if it moved them.
+ * The vertex must end on the side of the triangle it started on, at least distance_needed
+ * from it. Where its end lies over the face, the plane says which side it is on; where it lies
+ * beside the triangle, it is pushed only if within reach, or if the continuous test finds that
+ * its path crossed the thickened triangle during the substep. */
+static bool resolve_pair(plait_particles *p, int i, const int *corners, float distance_needed, float friction,
+                         bool fast)
+{
+	vec3 a = p->x[corners[0]], b = p->x[corners[1]], c = p->x[corners[2]];
+	vec3 a0 = p->x_prev[corners[0]], b0 = p->x_prev[corners[1]], c0 = p->x_prev[corners[2]];
+	int region;
+	float start_weights[3];
+	vec3 q0 = plait_closest_point_on_triangle(p->x_prev[i], a0, b0, c0, &region, start_weights);
+	vec3 face0 = v3_normalize(v3_cross(v3_sub(b0, a0), v3_sub(c0, a0)));
+	float weights[3];
+	vec3 q = plait_closest_point_on_triangle(p->x[i], a, b, c, &region, weights);
+	vec3 face = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+	if (v3_length_sq(face) == 0.0f || v3_length_sq(face0) == 0.0f) {
+		return false;
+	}
+	float side = v3_dot(v3_sub(p->x_prev[i], q0), face0) >= 0.0f ? 1.0f : -1.0f;
+	vec3 n = v3_scale(face, side);
+	float distance = v3_dot(v3_sub(p->x[i], q), n);
+	if (region != 0 && v3_length(v3_sub(p->x[i], q)) >= distance_needed) {
+		if (!fast) {
+			return false; /* beside the triangle, out of reach */
+		}
+		plait_ccd_motion_float m;
+		vec3 start[4] = {p->x_prev[i], a0, b0, c0}, end[4] = {p->x[i], a, b, c};
+		for (int k = 0; k < 4; ++k) {
+			m.start[k][0] = start[k].x;
+			m.start[k][1] = start[k].y;
+			m.start[k][2] = start[k].z;
+			m.end[k][0] = end[k].x;
+			m.end[k][1] = end[k].y;
+			m.end[k][2] = end[k].z;
+		}
+		float toi;
+		if (!plait_ccd_vertex_face_float(&m, distance_needed, 1e-4f, 1.0f, &toi)) {
+			return false;
+		}
+	}
+	float depth = distance_needed - distance;
+	if (depth <= 0.0f) {
+		return false;
+	}
+	/* A vertex that rested on a collider in the last substep is supported: it does not give way
+	 * (the collider would only push it back), which lets layers stack on the ground. */
+	float wi = p->w[i], wk[3];
+	bool any_free = !(p->flags[i] & PLAIT_PARTICLE_SUPPORTED) && wi > 0.0f;
+	for (int k = 0; k < 3; ++k) {
+		wk[k] = p->w[corners[k]];
+		any_free = any_free || (!(p->flags[corners[k]] & PLAIT_PARTICLE_SUPPORTED) && wk[k] > 0.0f);
+	}
+	if (any_free) {
+		wi = (p->flags[i] & PLAIT_PARTICLE_SUPPORTED) ? 0.0f : wi;
+		for (int k = 0; k < 3; ++k) {
+			wk[k] = (p->flags[corners[k]] & PLAIT_PARTICLE_SUPPORTED) ? 0.0f : wk[k];
+		}
+	}
+	float denominator = wi;
+	for (int k = 0; k < 3; ++k) {
+		denominator += weights[k] * weights[k] * wk[k];
+	}
+	if (!(denominator > 0.0f)) {
+		return false;
+	}
+	/* Friction on the relative tangential motion of the substep, within friction x depth. */
+	vec3 relative = v3_sub(v3_sub(p->x[i], p->x_prev[i]),
+	                       v3_sub(blend(p->x, corners, weights), blend(p->x_prev, corners, weights)));
+	vec3 tangential = v3_mul_add(relative, -v3_dot(relative, n), n);
+	float tangential_length = v3_length(tangential);
+	vec3 move = v3_scale(n, depth);
+	if (tangential_length > 0.0f && friction > 0.0f) {
+		float limit = friction * depth;
+		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
+		move = v3_mul_add(move, -removed, tangential);
+	}
+	/* Shared by inverse mass; the triangle's share spread by barycentric weight. */
+	vec3 step = v3_scale(move, 1.0f / denominator);
+	p->x[i] = v3_mul_add(p->x[i], wi, step);
+	for (int k = 0; k < 3; ++k) {
+		p->x[corners[k]] = v3_mul_add(p->x[corners[k]], -weights[k] * wk[k], step);
+	}
+	return true;
+}
+
+int plait_collide_surfaces(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	float max_radius = 0.0f;
+	for (int i = 0; i < p->count; ++i) {
+		max_radius = plait_maxf(max_radius, p->radius[i]);
+	}
+	int contacts = 0;
+	for (int s = 0; s < sim->surface_count; ++s) {
+		plait_surface *surface = &sim->surfaces[s];
+		const plait_material *surface_material = &sim->materials[surface->material];
+		if (!surface_material->collide || p->count == surface->shape->vertex_count) {
+			continue; /* nothing else to touch it */
+		}
+		float thickness = surface_material->thickness;
+		/* Grown by the thickest possible pair, so a vertex is found from its own swept box. */
+		refit(surface->shape, p, surface->first, thickness + max_radius);
+		int last = surface->first + surface->shape->vertex_count;
+		for (int i = 0; i < p->count; ++i) {
+			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || (i >= surface->first && i < last)) {
+				continue;
+			}
+			const plait_material *mat = &sim->materials[p->material[i]];
+			if (!mat->collide) {
+				continue;
+			}
+			vec3 lower = v3_min(p->x[i], p->x_prev[i]), upper = v3_max(p->x[i], p->x_prev[i]);
+			int candidates[SURFACE_CANDIDATES];
+			int found =
+			    plait_mesh_shape_query_leaves(surface->shape, lower, upper, candidates, SURFACE_CANDIDATES);
+			found = found < SURFACE_CANDIDATES ? found : SURFACE_CANDIDATES;
+			float distance_needed = p->radius[i] + thickness;
+			float friction = 0.5f * (mat->friction + surface_material->friction);
+			friction = friction > 1.0f ? 1.0f : friction;
+			for (int k = 0; k < found; ++k) {
+				const int *tri = surface->shape->triangles[candidates[k]];
+				int corners[3] = {surface->first + tri[0], surface->first + tri[1], surface->first + tri[2]};
+				/* Fast relative motion is swept; slow motion cannot cross a thickened triangle
+				 * without ending within reach of it. */
+				vec3 relative =
+				    v3_sub(v3_sub(p->x[i], p->x_prev[i]), v3_sub(p->x[corners[0]], p->x_prev[corners[0]]));
+				bool fast = v3_length(relative) >= distance_needed;
+				contacts += resolve_pair(p, i, corners, distance_needed, friction, fast);
+			}
+		}
+	}
+	return contacts;
+}
