@@ -267,3 +267,112 @@ Test(api, allocator_hooks_see_every_byte_and_get_them_back)
 	cr_assert_eq(live_bytes, 0, "%zu bytes not returned", live_bytes);
 	test_grid_free(&grid);
 }
+
+Test(api, ranges_that_overflow_an_int_are_rejected)
+{
+	plait_world_def wdef = plait_default_world_def();
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_vec3 x[3] = {{0, 2, 0}, {1, 2, 0}, {2, 2, 0}};
+	plait_particles_def def = plait_default_particles_def();
+	def.positions = x;
+	def.count = 3;
+	plait_object_id id = plait_create_particles(world, &def, NULL);
+	plait_vec3 out[3];
+	plait_error error;
+	cr_assert_eq(plait_object_get_positions(id, 2, 2147483647, out, &error), PLAIT_ERROR_INVALID_ARGUMENT);
+	ASSERT_MESSAGE(error, "outside its 3 vertices");
+	cr_assert_eq(plait_object_set_velocities(id, 4, 0, out, &error), PLAIT_ERROR_INVALID_ARGUMENT);
+	plait_destroy_world(world);
+}
+
+Test(api, a_frame_going_non_finite_is_rolled_back)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.time_scale = 100.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_vec3 x[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}};
+	plait_vec3 v[4] = {{3e38f, 0, 0}, {-3e38f, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+	plait_particles_def def = plait_default_particles_def();
+	def.positions = x;
+	def.velocities = v;
+	def.count = 4;
+	plait_object_id id = plait_create_particles(world, &def, NULL);
+	plait_error error;
+	cr_assert_eq(plait_world_step(world, &error), PLAIT_ERROR_NONFINITE);
+	ASSERT_MESSAGE(error, "non-finite");
+	plait_vec3 out[4];
+	plait_object_get_positions(id, 0, 4, out, NULL);
+	for (int k = 0; k < 4; ++k) {
+		cr_assert(out[k].x == x[k].x && out[k].y == x[k].y && out[k].z == x[k].z,
+		          "particle %d was not restored", k);
+	}
+	cr_assert_eq(plait_world_get_frame(world), 0);
+	plait_destroy_world(world);
+}
+
+/* Every allocation failing in turn, while creating and destroying objects: each call either
+ * works or says "out of memory", and what it leaves behind is consistent. */
+static int fail_after;
+static void *failing_alloc(size_t size, size_t alignment, void *context)
+{
+	(void)context;
+	if (fail_after-- == 0) {
+		return NULL;
+	}
+	return aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
+}
+static void plain_free(void *memory, void *context)
+{
+	(void)context;
+	free(memory);
+}
+
+Test(api, out_of_memory_anywhere_leaves_a_consistent_world)
+{
+	for (int failure = 0; failure < 200; ++failure) {
+		plait_world_def wdef = plait_default_world_def();
+		wdef.alloc = failing_alloc;
+		wdef.free = plain_free;
+		fail_after = failure;
+		plait_error error;
+		plait_world_id world = plait_create_world(&wdef, &error);
+		if (plait_world_id_is_null(world)) {
+			cr_assert_eq(error.code, PLAIT_ERROR_OUT_OF_MEMORY);
+			continue;
+		}
+		test_grid grid = test_grid_make(4, 4, 1.0f, 1.0f);
+		/* Uneven spacing: a constraint given another's rest length would show. */
+		for (int i = 0; i < grid.vertex_count; ++i) {
+			grid.positions[i].x *= 1.0f + 0.1f * (float)(i % 3);
+		}
+		plait_cloth_def cloth = plait_default_cloth_def();
+		cloth.mesh = test_grid_mesh(&grid);
+		cloth.tethers = PLAIT_TETHER_GEODESIC;
+		int pins[1] = {0};
+		cloth.pins = pins;
+		cloth.pin_count = 1;
+		plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
+		if (plait_object_id_is_null(cloth_id)) {
+			cr_assert_eq(error.code, PLAIT_ERROR_OUT_OF_MEMORY, "%s", error.message);
+		} else {
+			/* Freshly made, the cloth is at rest: no stretch edge is strained. */
+			cr_assert_lt(plait_world_get_stats(world).max_strain, 1e-5f, "failure %d scrambled constraints",
+			             failure);
+		}
+		plait_vec3 x[2] = {{0, 2, 0}, {1, 2, 0}};
+		plait_particles_def particles = plait_default_particles_def();
+		particles.positions = x;
+		particles.count = 2;
+		plait_object_id dots = plait_create_particles(world, &particles, NULL);
+		plait_destroy_object(cloth_id);
+		if (!plait_object_id_is_null(dots)) {
+			plait_vec3 out[2];
+			cr_assert_eq(plait_object_get_positions(dots, 0, 2, out, NULL), PLAIT_OK);
+			cr_assert(out[0].y == 2.0f && out[1].x == 1.0f, "failure %d: the particles lost track of theirs",
+			          failure);
+		}
+		plait_world_step(world, NULL);
+		plait_destroy_world(world);
+		test_grid_free(&grid);
+	}
+}

@@ -3,6 +3,7 @@
  * mesh file in a scene becomes a collider. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -238,4 +239,79 @@ Test(mesh_collider, scene_mesh_file_becomes_a_collider)
 	}
 	plait_destroy_world(world);
 	plait_scene_free(&scene);
+}
+
+Test(mesh_collider, fast_particle_over_a_fine_mesh_finds_the_triangle_it_crosses)
+{
+	/* 300 x 300 quads: an oblique fast path overlaps thousands of candidate triangles. */
+	int n = 300, vertex_count = (n + 1) * (n + 1);
+	plait_vec3 *v = malloc(sizeof *v * (size_t)vertex_count);
+	int *sizes = malloc(sizeof(int) * (size_t)(n * n)), *indices = malloc(sizeof(int) * 4 * (size_t)(n * n));
+	for (int j = 0; j <= n; ++j) {
+		for (int i = 0; i <= n; ++i) {
+			v[j * (n + 1) + i] =
+			    (plait_vec3){-1.0f + 4.0f * (float)i / (float)n, 0.0f, -1.0f + 3.0f * (float)j / (float)n};
+		}
+	}
+	for (int f = 0, j = 0; j < n; ++j) {
+		for (int i = 0; i < n; ++i, ++f) {
+			int a = j * (n + 1) + i;
+			sizes[f] = 4;
+			int quad[4] = {a, a + n + 1, a + n + 2, a + 1};
+			memcpy(indices + 4 * f, quad, sizeof quad);
+		}
+	}
+	plait_world_def wdef = plait_default_world_def();
+	wdef.gravity = (plait_vec3){0, 0, 0};
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_collider_def collider = plait_default_collider_def();
+	collider.shape = PLAIT_SHAPE_MESH;
+	collider.mesh = (plait_mesh_def){v, vertex_count, sizes, n * n, indices};
+	plait_error error;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &collider, &error)), "%s", error.message);
+	plait_vec3 x = {0.0f, 0.2f, 0.5f}, velocity = {30.0f, -30.0f, 0.0f};
+	plait_particles_def particles = plait_default_particles_def();
+	particles.positions = &x;
+	particles.velocities = &velocity;
+	particles.count = 1;
+	plait_object_id p = plait_create_particles(world, &particles, NULL);
+	cr_assert(test_step_frames(world, 1));
+	plait_object_get_positions(p, 0, 1, &x, NULL);
+	cr_assert_geq(x.y, 0.0f, "the particle went through the mesh to y = %g", (double)x.y);
+	plait_destroy_world(world);
+	free(v);
+	free(sizes);
+	free(indices);
+}
+
+Test(mesh_collider, signed_distance_is_right_beyond_sharp_edges)
+{
+	/* A closed, outward-facing tetrahedron: points outside are positive, inside negative, also
+	 * where the nearest point is an edge or a corner. */
+	plait_vec3 corners[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+	int sizes[4] = {3, 3, 3, 3};
+	int indices[12] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+	plait_world_def wdef = plait_default_world_def();
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_collider_def collider = plait_default_collider_def();
+	collider.shape = PLAIT_SHAPE_MESH;
+	collider.mesh = (plait_mesh_def){corners, 4, sizes, 4, indices};
+	plait_object_id id = plait_create_collider(world, &collider, NULL);
+	uint32_t state = 7u;
+	int wrong = 0;
+	for (int k = 0; k < 20000; ++k) {
+		float c[3];
+		for (int axis = 0; axis < 3; ++axis) {
+			state = state * 1664525u + 1013904223u;
+			c[axis] = -1.0f + 3.0f * (float)(state >> 8) / (float)(1u << 24);
+		}
+		plait_vec3 point = {c[0], c[1], c[2]};
+		bool inside = c[0] > 0.0f && c[1] > 0.0f && c[2] > 0.0f && c[0] + c[1] + c[2] < 1.0f;
+		float d = plait_collider_signed_distance(id, point);
+		if (fabsf(d) > 1e-4f && (d < 0.0f) != inside) {
+			++wrong;
+		}
+	}
+	cr_assert_eq(wrong, 0, "%d of 20000 points got the wrong sign", wrong);
+	plait_destroy_world(world);
 }

@@ -96,7 +96,7 @@ typedef struct plait_wind_def {
 typedef struct plait_world_def {
 	float fps;                    /* frames per second, > 0 (24) */
 	int substeps;                 /* substeps per frame, 1..1000 (3) */
-	int max_collision_iterations; /* collision iterations per frame, >= 0 (4); never fewer than substeps */
+	int max_collision_iterations; /* collision iterations per frame, 0..1000 (4); never fewer than substeps */
 	plait_vec3 gravity;           /* m/s^2 (0, -9.81, 0); scaled by 1/space_scale */
 	float air_density;            /* kg/m^3, >= 0 (1.0) */
 	plait_wind_def wind;
@@ -123,14 +123,16 @@ void plait_destroy_world(plait_world_id world);
 bool plait_world_is_valid(plait_world_id world);
 
 /* Advance one frame (1/fps seconds times time_scale). Fails with PLAIT_ERROR_NONFINITE if any
- * particle became non-finite; the state is then left as it was at the start of the frame. */
+ * particle became non-finite, or PLAIT_ERROR_OUT_OF_MEMORY; the positions and velocities are
+ * then left as they were at the start of the frame. */
 plait_result plait_world_step(plait_world_id world, plait_error *error);
 
 /* Current frame number (0 after creation) and simulated time in seconds. */
 int plait_world_get_frame(plait_world_id world);
 double plait_world_get_time(plait_world_id world);
 
-/* Change settings between frames. The def's hooks are ignored. */
+/* Change settings between frames. The def's hooks (allocator, task system) are ignored: those of
+ * the world's creation stay. */
 plait_result plait_world_set_def(plait_world_id world, const plait_world_def *def, plait_error *error);
 plait_world_def plait_world_get_def(plait_world_id world);
 

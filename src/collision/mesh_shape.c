@@ -169,10 +169,10 @@ static bool boxes_overlap(vec3 al, vec3 au, vec3 bl, vec3 bu)
 	return al.x <= bu.x && bl.x <= au.x && al.y <= bu.y && bl.y <= au.y && al.z <= bu.z && bl.z <= au.z;
 }
 
-static int query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles, int capacity,
-                 bool test_triangles)
+void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
+                            plait_triangle_visitor *visit, void *context)
 {
-	int stack[64], depth = 0, found = 0;
+	int stack[64], depth = 0;
 	stack[depth++] = 0;
 	while (depth > 0) {
 		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
@@ -189,29 +189,13 @@ static int query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *tri
 						continue;
 					}
 				}
-				if (found < capacity) {
-					triangles[found] = t;
-				}
-				++found;
+				visit(t, context);
 			}
 		} else if (depth + 2 <= 64) {
 			stack[depth++] = n->first + 1;
 			stack[depth++] = n->first;
 		}
 	}
-	return found;
-}
-
-int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
-                           int capacity)
-{
-	return query(shape, lower, upper, triangles, capacity, true);
-}
-
-int plait_mesh_shape_query_leaves(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
-                                  int capacity)
-{
-	return query(shape, lower, upper, triangles, capacity, false);
 }
 
 static vec3 weighted(vec3 a, vec3 b, vec3 c, float wa, float wb, float wc, float weights[3])
@@ -269,8 +253,11 @@ vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region
 
 float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *normal)
 {
-	/* Branch and bound over the hierarchy: nearest triangle first by box distance. */
-	float best_sq = INFINITY;
+	/* Branch and bound over the hierarchy. Where several triangles share the nearest point (an
+	 * edge or a corner), the sign comes from the one p is most in front of: beyond a convex edge
+	 * that is positive, inside negative, so a point beyond a sharp edge is not taken for
+	 * inside. */
+	float best_sq = INFINITY, best_alignment = -INFINITY;
 	int best = -1;
 	vec3 best_point = p;
 	int stack[64], depth = 0;
@@ -278,7 +265,7 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 	while (depth > 0) {
 		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
 		vec3 clamped = v3_max(n->lower, v3_min(p, n->upper));
-		if (v3_length_sq(v3_sub(clamped, p)) >= best_sq) {
+		if (v3_length_sq(v3_sub(clamped, p)) > best_sq * (1.0f + 1e-5f)) {
 			continue;
 		}
 		if (n->count > 0) {
@@ -289,9 +276,14 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 				vec3 q =
 				    plait_closest_point_on_triangle(p, shape->positions[tri[0]], shape->positions[tri[1]],
 				                                    shape->positions[tri[2]], &region, NULL);
-				float d_sq = v3_length_sq(v3_sub(p, q));
-				if (d_sq < best_sq) {
-					best_sq = d_sq;
+				vec3 d = v3_sub(p, q);
+				float d_sq = v3_length_sq(d);
+				float alignment = v3_dot(d, shape->normals[t]);
+				bool nearer = d_sq < best_sq * (1.0f - 1e-5f);
+				bool tied = !nearer && d_sq <= best_sq * (1.0f + 1e-5f);
+				if (nearer || (tied && alignment > best_alignment)) {
+					best_sq = nearer ? d_sq : plait_minf(best_sq, d_sq);
+					best_alignment = alignment;
 					best = t;
 					best_point = q;
 				}
@@ -307,6 +299,6 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 	}
 	vec3 n = shape->normals[best];
 	*normal = v3_length_sq(n) > 0.0f ? n : v3(0.0f, 1.0f, 0.0f);
-	float distance = sqrtf(best_sq);
+	float distance = sqrtf(v3_length_sq(v3_sub(p, best_point)));
 	return v3_dot(v3_sub(p, best_point), *normal) < 0.0f ? -distance : distance;
 }

@@ -30,15 +30,11 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
                                     const plait_mesh_def *mesh, plait_error *error);
 void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *allocator);
 
-/* Triangles whose boxes overlap [lower, upper]; writes at most capacity, returns how many
- * overlap (may exceed capacity). */
-int plait_mesh_shape_query(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
-                           int capacity);
-
-/* The same, testing node boxes only (every triangle of an overlapping leaf): for hierarchies
- * whose node boxes were refitted to moving vertices while `positions` stay at rest. */
-int plait_mesh_shape_query_leaves(const plait_mesh_shape *shape, vec3 lower, vec3 upper, int *triangles,
-                                  int capacity);
+/* Calls visit(triangle, context) for every triangle whose node box (and, with
+ * test_triangles, whose own rest box) overlaps [lower, upper], however many there are. */
+typedef void plait_triangle_visitor(int triangle, void *context);
+void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
+                            plait_triangle_visitor *visit, void *context);
 
 /* The point of triangle (a, b, c) closest to p; *region is 0 inside the face, 1 on an edge or
  * corner; weights (may be NULL) receive its barycentric coordinates. */

@@ -3,8 +3,8 @@
 #include <string.h>
 
 const plait_hash_cell plait_hash_forward_neighbours[13] = {
-    {1, 0, 0},  {-1, 1, 0}, {0, 1, 0},  {1, 1, 0},  {-1, -1, 1}, {0, -1, 1}, {1, -1, 1},
-    {-1, 0, 1}, {0, 0, 1},  {1, 0, 1},  {-1, 1, 1}, {0, 1, 1},   {1, 1, 1},
+    {1, 0, 0},  {-1, 1, 0}, {0, 1, 0}, {1, 1, 0},  {-1, -1, 1}, {0, -1, 1}, {1, -1, 1},
+    {-1, 0, 1}, {0, 0, 1},  {1, 0, 1}, {-1, 1, 1}, {0, 1, 1},   {1, 1, 1},
 };
 
 void plait_particle_hash_destroy(plait_particle_hash *hash, const plait_allocator *allocator)
@@ -27,8 +27,13 @@ int plait_particle_hash_bucket(const plait_particle_hash *hash, plait_hash_cell 
 static int cell_coordinate(float value, float inverse)
 {
 	float c = floorf(value * inverse);
-	/* Far-away particles share the outermost cells instead of overflowing an int. */
-	c = c < -1e9f ? -1e9f : c > 1e9f ? 1e9f : c;
+	/* Far-away particles share the outermost cells instead of overflowing an int; a NaN
+	 * (a frame going non-finite, caught at its end) lands in one of them too. */
+	if (!(c >= -1e9f)) {
+		c = -1e9f;
+	} else if (c > 1e9f) {
+		c = 1e9f;
+	}
 	return (int)c;
 }
 
@@ -48,8 +53,9 @@ static bool reserve(void **array, int *capacity, int needed, size_t size, const 
 	return true;
 }
 
-bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator *allocator, const int *particles,
-                               const vec3 *lower, const vec3 *upper, int count, float cell_size)
+bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator *allocator,
+                               const int *particles, const vec3 *lower, const vec3 *upper, int count,
+                               float cell_size)
 {
 	hash->cell_size = cell_size;
 	float inverse = 1.0f / cell_size;
@@ -74,8 +80,9 @@ bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator 
 	for (int k = 0; k < count; ++k) {
 		vec3 centre = v3_scale(v3_add(lower[k], upper[k]), 0.5f);
 		plait_hash_entry *entry = &hash->scratch[k];
-		entry->cell = (plait_hash_cell){cell_coordinate(centre.x, inverse), cell_coordinate(centre.y, inverse),
-		                                cell_coordinate(centre.z, inverse)};
+		entry->cell =
+		    (plait_hash_cell){cell_coordinate(centre.x, inverse), cell_coordinate(centre.y, inverse),
+		                      cell_coordinate(centre.z, inverse)};
 		entry->particle = particles[k];
 		entry->slot = k;
 		hash->bucket_start[plait_particle_hash_bucket(hash, entry->cell) + 1] += 1;

@@ -28,6 +28,18 @@ static float hash_to_unit(uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32
 	return (float)(h & 0xFFFFFFu) / (float)0x7FFFFF - 1.0f;
 }
 
+/* A cell coordinate for the noise; NaN and huge values share the outermost cells. */
+static uint32_t noise_cell(float value)
+{
+	float c = floorf(value);
+	if (!(c >= -1e9f)) {
+		c = -1e9f;
+	} else if (c > 1e9f) {
+		c = 1e9f;
+	}
+	return (uint32_t)(int32_t)c;
+}
+
 static vec3 wind_noise(const plait_sim *sim, vec3 centroid, double time)
 {
 	const plait_settings *s = &sim->settings;
@@ -36,9 +48,8 @@ static vec3 wind_noise(const plait_sim *sim, vec3 centroid, double time)
 		return v3(0.0f, 0.0f, 0.0f);
 	}
 	float cell = 0.5f / s->space_scale;
-	uint32_t cx = (uint32_t)(int32_t)floorf(centroid.x / cell);
-	uint32_t cy = (uint32_t)(int32_t)floorf(centroid.y / cell);
-	uint32_t cz = (uint32_t)(int32_t)floorf(centroid.z / cell);
+	uint32_t cx = noise_cell(centroid.x / cell), cy = noise_cell(centroid.y / cell),
+	         cz = noise_cell(centroid.z / cell);
 	double slot = time / 0.25;
 	uint32_t t0 = (uint32_t)(int64_t)floor(slot);
 	float f = (float)(slot - floor(slot));

@@ -127,117 +127,126 @@ static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3
 	p->contact_stickiness[i] = stickiness;
 }
 
-/* Candidate triangles for one particle's path: enough for any sane mesh density; past it the
- * nearest ones found first are used. */
-#define MESH_CANDIDATES 64
+/* What a particle's pass over a mesh collider gathers, triangle by triangle. */
+typedef struct mesh_pass {
+	const plait_mesh_shape *mesh;
+	vec3 p0, p1;
+	float radius;
+	float first_toi;
+	int first_triangle;
+	float total_depth, deepest;
+	vec3 deepest_normal;
+	bool moved;
+} mesh_pass;
+
+/* The earliest time the path comes within the radius of a triangle (continuous test). */
+static void visit_sweep(int t, void *context)
+{
+	mesh_pass *pass = context;
+	const int *tri = pass->mesh->triangles[t];
+	plait_ccd_motion_float m;
+	vec3 points[4] = {pass->p0, pass->mesh->positions[tri[0]], pass->mesh->positions[tri[1]],
+	                  pass->mesh->positions[tri[2]]};
+	for (int q = 0; q < 4; ++q) {
+		vec3 end = q == 0 ? pass->p1 : points[q];
+		m.start[q][0] = points[q].x;
+		m.start[q][1] = points[q].y;
+		m.start[q][2] = points[q].z;
+		m.end[q][0] = end.x;
+		m.end[q][1] = end.y;
+		m.end[q][2] = end.z;
+	}
+	float toi;
+	float limit = pass->first_toi < 1.0f ? pass->first_toi : 1.0f;
+	if (plait_ccd_vertex_face_float(&m, pass->radius, 1e-4f, limit, &toi) && toi < pass->first_toi) {
+		pass->first_toi = toi;
+		pass->first_triangle = t;
+	}
+}
+
+static void push_out(mesh_pass *pass, vec3 n, float depth)
+{
+	pass->p1 = v3_mul_add(pass->p1, depth, n);
+	pass->total_depth += depth;
+	if (depth > pass->deepest) {
+		pass->deepest = depth;
+		pass->deepest_normal = n;
+	}
+	pass->moved = true;
+}
+
+/* Push the end out of a triangle within the radius, on the side the path came from when the
+ * nearest point is inside the face (a thin sheet has two sides). */
+static void visit_proximity(int t, void *context)
+{
+	mesh_pass *pass = context;
+	const plait_mesh_shape *mesh = pass->mesh;
+	const int *tri = mesh->triangles[t];
+	int region;
+	vec3 q = plait_closest_point_on_triangle(pass->p1, mesh->positions[tri[0]], mesh->positions[tri[1]],
+	                                         mesh->positions[tri[2]], &region, NULL);
+	vec3 face = mesh->normals[t];
+	vec3 n;
+	float distance;
+	if (region == 0 && v3_length_sq(face) > 0.0f) {
+		n = v3_dot(v3_sub(pass->p0, q), face) >= 0.0f ? face : v3_neg(face);
+		distance = v3_dot(v3_sub(pass->p1, q), n);
+	} else {
+		vec3 d = v3_sub(pass->p1, q);
+		distance = v3_length(d);
+		if (distance >= pass->radius) {
+			return;
+		}
+		n = distance > 1e-6f * pass->radius
+		        ? v3_scale(d, 1.0f / distance)
+		        : (v3_dot(v3_sub(pass->p0, q), face) >= 0.0f ? face : v3_neg(face));
+	}
+	if (pass->radius - distance > 0.0f) {
+		push_out(pass, n, pass->radius - distance);
+	}
+}
 
 /* One particle against a mesh collider, in the collider's space (where the mesh stands
  * still). A path shorter than the contact radius cannot pass through a triangle without ending
  * within the radius of it, so a proximity test at the end suffices; a longer one is swept with
- * the continuous vertex-triangle test (collision/ccd.h), which never misses a contact. Returns
- * true when the particle was moved; *p1 is updated in shape space. */
+ * the continuous vertex-triangle test (collision/ccd.h), which never misses a contact. Every
+ * candidate triangle is visited, however many the path overlaps. Returns true when the particle
+ * was moved; *p1 is updated in shape space. */
 static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 *p1, float radius,
                                     float friction, vec3 *contact_normal)
 {
 	vec3 grow = {radius, radius, radius};
 	vec3 lower = v3_sub(v3_min(p0, *p1), grow), upper = v3_add(v3_max(p0, *p1), grow);
-	int candidates[MESH_CANDIDATES];
-	int found = plait_mesh_shape_query(mesh, lower, upper, candidates, MESH_CANDIDATES);
-	if (found == 0) {
-		return false;
-	}
-	found = found < MESH_CANDIDATES ? found : MESH_CANDIDATES;
-	vec3 motion = v3_sub(*p1, p0);
-	bool moved = false;
-	float total_depth = 0.0f;
-	vec3 deepest_normal = {0.0f, 0.0f, 0.0f};
-	float deepest = 0.0f;
-	if (v3_length(motion) >= radius) {
+	mesh_pass pass = {mesh, p0, *p1, radius, 2.0f, -1, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}, false};
+	if (v3_length(v3_sub(*p1, p0)) >= radius) {
 		/* Fast: the earliest contact along the path, then keep the end on the contact's side. */
-		float first_toi = 2.0f;
-		int first_triangle = -1;
-		for (int k = 0; k < found; ++k) {
-			const int *tri = mesh->triangles[candidates[k]];
-			plait_ccd_motion_float m;
-			vec3 points[4] = {p0, mesh->positions[tri[0]], mesh->positions[tri[1]], mesh->positions[tri[2]]};
-			for (int q = 0; q < 4; ++q) {
-				vec3 end = q == 0 ? *p1 : points[q];
-				m.start[q][0] = points[q].x;
-				m.start[q][1] = points[q].y;
-				m.start[q][2] = points[q].z;
-				m.end[q][0] = end.x;
-				m.end[q][1] = end.y;
-				m.end[q][2] = end.z;
-			}
-			float toi;
-			if (plait_ccd_vertex_face_float(&m, radius, 1e-4f, first_toi < 1.0f ? first_toi : 1.0f, &toi) &&
-			    toi < first_toi) {
-				first_toi = toi;
-				first_triangle = candidates[k];
-			}
-		}
-		if (first_triangle >= 0) {
-			const int *tri = mesh->triangles[first_triangle];
-			vec3 at = v3_lerp(p0, *p1, first_toi);
+		plait_mesh_shape_visit(mesh, lower, upper, true, visit_sweep, &pass);
+		if (pass.first_triangle >= 0) {
+			const int *tri = mesh->triangles[pass.first_triangle];
+			vec3 at = v3_lerp(p0, *p1, pass.first_toi);
 			int region;
 			vec3 q = plait_closest_point_on_triangle(at, mesh->positions[tri[0]], mesh->positions[tri[1]],
 			                                         mesh->positions[tri[2]], &region, NULL);
 			vec3 n = v3_sub(at, q);
 			float length = v3_length(n);
-			vec3 face = mesh->normals[first_triangle];
+			vec3 face = mesh->normals[pass.first_triangle];
 			n = length > 1e-6f * radius ? v3_scale(n, 1.0f / length)
 			                            : (v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face));
-			float depth = radius - v3_dot(v3_sub(*p1, q), n);
+			float depth = radius - v3_dot(v3_sub(pass.p1, q), n);
 			if (depth > 0.0f) {
-				*p1 = v3_mul_add(*p1, depth, n);
-				total_depth += depth;
-				deepest = depth;
-				deepest_normal = n;
-				moved = true;
+				push_out(&pass, n, depth);
 			}
 		}
 	}
-	/* Proximity at the end: push out of every triangle within the radius, on the side the path
-	 * came from when the nearest point is inside a face (a thin sheet has two sides). */
-	for (int k = 0; k < found; ++k) {
-		int t = candidates[k];
-		const int *tri = mesh->triangles[t];
-		int region;
-		vec3 q = plait_closest_point_on_triangle(*p1, mesh->positions[tri[0]], mesh->positions[tri[1]],
-		                                         mesh->positions[tri[2]], &region, NULL);
-		vec3 face = mesh->normals[t];
-		vec3 n;
-		float distance;
-		if (region == 0 && v3_length_sq(face) > 0.0f) {
-			n = v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face);
-			distance = v3_dot(v3_sub(*p1, q), n);
-		} else {
-			vec3 d = v3_sub(*p1, q);
-			distance = v3_length(d);
-			if (distance >= radius) {
-				continue;
-			}
-			n = distance > 1e-6f * radius ? v3_scale(d, 1.0f / distance)
-			                              : (v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face));
-		}
-		float depth = radius - distance;
-		if (depth <= 0.0f) {
-			continue;
-		}
-		*p1 = v3_mul_add(*p1, depth, n);
-		total_depth += depth;
-		if (depth > deepest) {
-			deepest = depth;
-			deepest_normal = n;
-		}
-		moved = true;
+	plait_mesh_shape_visit(mesh, lower, upper, true, visit_proximity, &pass);
+	if (!pass.moved) {
+		return false;
 	}
-	if (moved) {
-		/* Friction once, against the deepest contact, on the whole normal push. */
-		*p1 = v3_add(*p1, friction_correction(v3_sub(*p1, p0), deepest_normal, friction * total_depth));
-		*contact_normal = deepest_normal;
-	}
-	return moved;
+	/* Friction once, against the deepest contact, on the whole normal push. */
+	*p1 = v3_add(pass.p1,
+	             friction_correction(v3_sub(pass.p1, p0), pass.deepest_normal, friction * pass.total_depth));
+	*contact_normal = pass.deepest_normal;
+	return true;
 }
 
 static int collide_with_collider(plait_sim *sim, const plait_collider *c)

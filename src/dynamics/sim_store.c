@@ -422,41 +422,42 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 #define BATCH_WINDOW 64
 
 /* Applies order (indices relative to first) to count elements of size bytes at data + first. */
-static bool permute(const plait_allocator *allocator, void *data, size_t size, int first, int count,
-                    const int *order)
+/* Applies order to count elements of `size` bytes at data + first, through scratch (room for
+ * count elements of the largest size): it cannot fail, so a block is never half-permuted. */
+static void permute(char *scratch, void *data, size_t size, int first, int count, const int *order)
 {
-	char *scratch = plait_alloc(allocator, size * (size_t)count);
-	if (scratch == NULL) {
-		return false;
-	}
 	char *base = (char *)data + size * (size_t)first;
 	for (int k = 0; k < count; ++k) {
 		memcpy(scratch + size * (size_t)k, base + size * (size_t)order[k], size);
 	}
 	memcpy(base, scratch, size * (size_t)count);
-	plait_free(allocator, scratch);
+}
+
+/* Makes room for `batches` more entries in a block's batch list. */
+static bool reserve_batches(const plait_allocator *a, int **batch_start, int batch_count, int *batch_capacity,
+                            int batches)
+{
+	int needed = batch_count + batches + 1;
+	if (needed <= *batch_capacity) {
+		return true;
+	}
+	int capacity = needed + needed / 2;
+	if (!grow_array(a, (void **)batch_start, sizeof(int), batch_count + 1, capacity)) {
+		return false;
+	}
+	*batch_capacity = capacity;
 	return true;
 }
 
-/* Appends batches of the given sizes, starting at first, to a block's batch list. */
-static bool record_batches(const plait_allocator *a, int **batch_start, int *batch_count, int *batch_capacity,
-                           int first, const int *sizes, int batches)
+/* Appends batches of the given sizes, starting at first, to a block's batch list (reserved). */
+static void record_batches(int *batch_start, int *batch_count, int first, const int *sizes, int batches)
 {
-	int needed = *batch_count + batches + 1;
-	if (needed > *batch_capacity) {
-		int capacity = needed + needed / 2;
-		if (!grow_array(a, (void **)batch_start, sizeof(int), *batch_count + 1, capacity)) {
-			return false;
-		}
-		*batch_capacity = capacity;
-	}
 	int start = first;
-	(*batch_start)[*batch_count] = start;
+	batch_start[*batch_count] = start;
 	for (int k = 0; k < batches; ++k) {
 		start += sizes[k];
-		(*batch_start)[++*batch_count] = start;
+		batch_start[++*batch_count] = start;
 	}
-	return true;
 }
 
 bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first)
@@ -469,16 +470,24 @@ bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first
 	const plait_allocator *a = &sim->allocator;
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	int batches = order != NULL && sizes != NULL ? plait_batch_order(a, &b->pair[first][0], 2, count,
-	                                                                 BATCH_WIDTH, BATCH_WINDOW, order, sizes)
-	                                             : -1;
-	bool ok = batches >= 0 && permute(a, b->pair, sizeof *b->pair, first, count, order) &&
-	          permute(a, b->rest, sizeof(float), first, count, order) &&
-	          permute(a, b->compliance_tension, sizeof(float), first, count, order) &&
-	          permute(a, b->compliance_compression, sizeof(float), first, count, order) &&
-	          record_batches(a, &b->batch_start, &b->batch_count, &b->batch_capacity, first, sizes, batches);
+	char *scratch = plait_alloc(a, sizeof *b->pair * (size_t)count);
+	int batches =
+	    order != NULL && sizes != NULL && scratch != NULL
+	        ? plait_batch_order(a, &b->pair[first][0], 2, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
+	        : -1;
+	/* Room for the batch list first: after that nothing can fail half-way. */
+	bool ok =
+	    batches >= 0 && reserve_batches(a, &b->batch_start, b->batch_count, &b->batch_capacity, batches);
+	if (ok) {
+		permute(scratch, b->pair, sizeof *b->pair, first, count, order);
+		permute(scratch, b->rest, sizeof(float), first, count, order);
+		permute(scratch, b->compliance_tension, sizeof(float), first, count, order);
+		permute(scratch, b->compliance_compression, sizeof(float), first, count, order);
+		record_batches(b->batch_start, &b->batch_count, first, sizes, batches);
+	}
 	plait_free(a, order);
 	plait_free(a, sizes);
+	plait_free(a, scratch);
 	return ok;
 }
 
@@ -493,14 +502,21 @@ bool plait_sim_batch_bend(plait_sim *sim, int first)
 	const plait_allocator *a = &sim->allocator;
 	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	int batches = order != NULL && sizes != NULL ? plait_batch_order(a, &b->quad[first][0], 4, count,
-	                                                                 BATCH_WIDTH, BATCH_WINDOW, order, sizes)
-	                                             : -1;
-	bool ok = batches >= 0 && permute(a, b->quad, sizeof *b->quad, first, count, order) &&
-	          permute(a, b->rest_angle, sizeof(float), first, count, order) &&
-	          permute(a, b->compliance, sizeof(float), first, count, order) &&
-	          record_batches(a, &b->batch_start, &b->batch_count, &b->batch_capacity, first, sizes, batches);
+	char *scratch = plait_alloc(a, sizeof *b->quad * (size_t)count);
+	int batches =
+	    order != NULL && sizes != NULL && scratch != NULL
+	        ? plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
+	        : -1;
+	bool ok =
+	    batches >= 0 && reserve_batches(a, &b->batch_start, b->batch_count, &b->batch_capacity, batches);
+	if (ok) {
+		permute(scratch, b->quad, sizeof *b->quad, first, count, order);
+		permute(scratch, b->rest_angle, sizeof(float), first, count, order);
+		permute(scratch, b->compliance, sizeof(float), first, count, order);
+		record_batches(b->batch_start, &b->batch_count, first, sizes, batches);
+	}
 	plait_free(a, order);
 	plait_free(a, sizes);
+	plait_free(a, scratch);
 	return ok;
 }

@@ -159,7 +159,10 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 		predict_positions(sim, h, t1);
 		reset_multipliers(sim);
 		if (!plait_contacts_begin_substep(sim)) {
-			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory in the collision stage");
+			memcpy(p->x, p->x_frame, sizeof(vec3) * (size_t)p->count);
+			memcpy(p->v, p->v_frame, sizeof(vec3) * (size_t)p->count);
+			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
+			                       "out of memory in the collision stage; the frame was not advanced");
 		}
 
 		/* The interleaved events of this substep (paper §6), collisions last. */

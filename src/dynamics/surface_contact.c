@@ -5,8 +5,6 @@
 #include "collision/ccd.h"
 #include "collision/mesh_shape.h"
 
-#define SURFACE_CANDIDATES 64
-
 bool plait_sim_reserve_surfaces(plait_sim *sim, int count)
 {
 	int needed = sim->surface_count + count;
@@ -62,6 +60,25 @@ static vec3 blend(const vec3 *x, const int *corners, const float *weights)
 	              v3_scale(x[corners[2]], weights[2]));
 }
 
+/* Whether the path of vertex i over the substep comes within distance_needed of the moving
+ * triangle (the conservative continuous test: never a miss). */
+static bool swept_through(const plait_particles *p, int i, const int *corners, float distance_needed)
+{
+	plait_ccd_motion_float m;
+	vec3 start[4] = {p->x_prev[i], p->x_prev[corners[0]], p->x_prev[corners[1]], p->x_prev[corners[2]]};
+	vec3 end[4] = {p->x[i], p->x[corners[0]], p->x[corners[1]], p->x[corners[2]]};
+	for (int k = 0; k < 4; ++k) {
+		m.start[k][0] = start[k].x;
+		m.start[k][1] = start[k].y;
+		m.start[k][2] = start[k].z;
+		m.end[k][0] = end[k].x;
+		m.end[k][1] = end[k].y;
+		m.end[k][2] = end[k].z;
+	}
+	float toi;
+	return plait_ccd_vertex_face_float(&m, distance_needed, 1e-4f, 1.0f, &toi);
+}
+
 /* Resolves vertex i against triangle (world indices) corners; returns true if it moved them.
  * The vertex must end on the side of the triangle it started on, at least distance_needed
  * from it. Where its end lies over the face, the plane says which side it is on; where it lies
@@ -85,22 +102,15 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 	float side = v3_dot(v3_sub(p->x_prev[i], q0), face0) >= 0.0f ? 1.0f : -1.0f;
 	vec3 n = v3_scale(face, side);
 	float distance = v3_dot(v3_sub(p->x[i], q), n);
-	if (region != 0 && v3_length(v3_sub(p->x[i], q)) >= distance_needed) {
-		if (!fast) {
-			return false; /* beside the triangle, out of reach */
+	bool beside = region != 0 && v3_length(v3_sub(p->x[i], q)) >= distance_needed;
+	/* Ending beside the triangle out of reach, or far behind its plane, is a crossing only if
+	 * the path really went through the thickened triangle: ask the continuous test. (A vertex
+	 * may end behind the plane of a triangle it never touched, having gone round the sheet.) */
+	if (beside || distance < -distance_needed) {
+		if (beside && !fast) {
+			return false;
 		}
-		plait_ccd_motion_float m;
-		vec3 start[4] = {p->x_prev[i], a0, b0, c0}, end[4] = {p->x[i], a, b, c};
-		for (int k = 0; k < 4; ++k) {
-			m.start[k][0] = start[k].x;
-			m.start[k][1] = start[k].y;
-			m.start[k][2] = start[k].z;
-			m.end[k][0] = end[k].x;
-			m.end[k][1] = end[k].y;
-			m.end[k][2] = end[k].z;
-		}
-		float toi;
-		if (!plait_ccd_vertex_face_float(&m, distance_needed, 1e-4f, 1.0f, &toi)) {
+		if (!swept_through(p, i, corners, distance_needed)) {
 			return false;
 		}
 	}
@@ -149,6 +159,34 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 	return true;
 }
 
+/* One vertex against the triangles of one surface, triangle by triangle. */
+typedef struct surface_pass {
+	plait_particles *p;
+	int vertex, first;
+	const plait_mesh_shape *shape;
+	float distance_needed, friction;
+	int contacts;
+} surface_pass;
+
+static float friction_of(const plait_material *a, const plait_material *b)
+{
+	float friction = 0.5f * (a->friction + b->friction);
+	return friction > 1.0f ? 1.0f : friction;
+}
+
+static void visit_triangle(int t, void *context)
+{
+	surface_pass *pass = context;
+	const int *tri = pass->shape->triangles[t];
+	int corners[3] = {pass->first + tri[0], pass->first + tri[1], pass->first + tri[2]};
+	plait_particles *p = pass->p;
+	int i = pass->vertex;
+	/* Fast relative motion may cross a triangle and end beside it: checked continuously. */
+	vec3 relative = v3_sub(v3_sub(p->x[i], p->x_prev[i]), v3_sub(p->x[corners[0]], p->x_prev[corners[0]]));
+	bool fast = v3_length(relative) >= pass->distance_needed;
+	pass->contacts += resolve_pair(p, i, corners, pass->distance_needed, pass->friction, fast);
+}
+
 int plait_collide_surfaces(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
@@ -175,24 +213,16 @@ int plait_collide_surfaces(plait_sim *sim)
 			if (!mat->collide) {
 				continue;
 			}
-			vec3 lower = v3_min(p->x[i], p->x_prev[i]), upper = v3_max(p->x[i], p->x_prev[i]);
-			int candidates[SURFACE_CANDIDATES];
-			int found =
-			    plait_mesh_shape_query_leaves(surface->shape, lower, upper, candidates, SURFACE_CANDIDATES);
-			found = found < SURFACE_CANDIDATES ? found : SURFACE_CANDIDATES;
-			float distance_needed = p->radius[i] + thickness;
-			float friction = 0.5f * (mat->friction + surface_material->friction);
-			friction = friction > 1.0f ? 1.0f : friction;
-			for (int k = 0; k < found; ++k) {
-				const int *tri = surface->shape->triangles[candidates[k]];
-				int corners[3] = {surface->first + tri[0], surface->first + tri[1], surface->first + tri[2]};
-				/* Fast relative motion is swept; slow motion cannot cross a thickened triangle
-				 * without ending within reach of it. */
-				vec3 relative =
-				    v3_sub(v3_sub(p->x[i], p->x_prev[i]), v3_sub(p->x[corners[0]], p->x_prev[corners[0]]));
-				bool fast = v3_length(relative) >= distance_needed;
-				contacts += resolve_pair(p, i, corners, distance_needed, friction, fast);
-			}
+			surface_pass pass = {p,
+			                     i,
+			                     surface->first,
+			                     surface->shape,
+			                     p->radius[i] + thickness,
+			                     friction_of(mat, surface_material),
+			                     0};
+			plait_mesh_shape_visit(surface->shape, v3_min(p->x[i], p->x_prev[i]),
+			                       v3_max(p->x[i], p->x_prev[i]), false, visit_triangle, &pass);
+			contacts += pass.contacts;
 		}
 	}
 	return contacts;

@@ -215,7 +215,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	                         mesh->face_count, mesh->face_indices, error) != PLAIT_OK) {
 		char reason[PLAIT_ERROR_MESSAGE_SIZE];
 		snprintf(reason, sizeof reason, "%s", error != NULL ? error->message : "");
-		plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s", label, reason);
+		plait_error_set(error, error != NULL ? error->code : PLAIT_ERROR_INVALID_MESH, "%s: %s", label,
+		                reason);
 		abandon_object(world, object);
 		return (plait_object_id){0};
 	}
@@ -377,7 +378,9 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 			sim->bend.quad[c][2] = first + p2;
 			sim->bend.quad[c][3] = first + p3;
 			sim->bend.rest_angle[c] = angle;
-			sim->bend.compliance[c] = areas / (3.0f * bending_stiffness * hinge_sq);
+			/* The maximum resistance is rigid, as for every resistance. */
+			sim->bend.compliance[c] =
+			    def->bend_resistance >= MAX_RESISTANCE ? 0.0f : areas / (3.0f * bending_stiffness * hinge_sq);
 			sim->bend.lambda[c] = 0.0f;
 		}
 	}
@@ -552,7 +555,8 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 			sim->rod_bend.triple[c][1] = first + i;
 			sim->rod_bend.triple[c][2] = first + i + 1;
 			sim->rod_bend.rest[c] = v3_length(v3_sub(x[i], mid));
-			sim->rod_bend.compliance[c] = length * length * length / (4.0f * bending);
+			sim->rod_bend.compliance[c] =
+			    def->bend_resistance >= MAX_RESISTANCE ? 0.0f : length * length * length / (4.0f * bending);
 			sim->rod_bend.lambda[c] = 0.0f;
 		}
 	}
@@ -714,7 +718,8 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 		if (plait_mesh_shape_build(shape.mesh, &world->allocator, &def->mesh, error) != PLAIT_OK) {
 			char reason[PLAIT_ERROR_MESSAGE_SIZE];
 			snprintf(reason, sizeof reason, "%s", error != NULL ? error->message : "");
-			plait_error_set(error, PLAIT_ERROR_INVALID_MESH, "%s: %s", label, reason);
+			plait_error_set(error, error != NULL ? error->code : PLAIT_ERROR_INVALID_MESH, "%s: %s", label,
+			                reason);
 			plait_free(&world->allocator, shape.mesh);
 			return id;
 		}

@@ -31,8 +31,11 @@ void plait_destroy_object(plait_object_id id)
 		for (int i = 0; i < sim->particles.count; ++i) {
 			keep[i] = i < object->first_particle || i >= object->first_particle + object->particle_count;
 		}
-		plait_sim_compact(sim, keep);
+		bool compacted = plait_sim_compact(sim, keep);
 		plait_free(&world->allocator, keep);
+		if (!compacted) {
+			return; /* Out of memory before anything changed: the object stays. */
+		}
 		for (int o = 0; o < world->object_count; ++o) {
 			plait_object *other = &world->objects[o];
 			if (other->alive && other->first_particle > object->first_particle) {
@@ -174,10 +177,12 @@ static plait_object *resolve_range(plait_object_id id, int first, int count, con
 	if (object == NULL) {
 		return NULL;
 	}
-	if (first < 0 || count < 0 || first + count > object->particle_count || (count > 0 && buffer == NULL)) {
-		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
-		                "'%s': vertex range %d..%d is outside its %d vertices (or the buffer is NULL)",
-		                object->name, first, first + count - 1, object->particle_count);
+	if (first < 0 || count < 0 || first > object->particle_count || count > object->particle_count - first ||
+	    (count > 0 && buffer == NULL)) {
+		plait_error_set(
+		    error, PLAIT_ERROR_INVALID_ARGUMENT,
+		    "'%s': %d vertices from vertex %d are outside its %d vertices (or the buffer is NULL)",
+		    object->name, count, first, object->particle_count);
 		return NULL;
 	}
 	return object;

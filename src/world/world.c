@@ -34,7 +34,7 @@ static bool finite3(plait_vec3 v)
 	return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
 }
 
-static plait_result validate_world_def(const plait_world_def *def, plait_error *error)
+static plait_result validate_world_def(const plait_world_def *def, bool check_hooks, plait_error *error)
 {
 	if (def == NULL) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "world def is NULL");
@@ -79,7 +79,7 @@ static plait_result validate_world_def(const plait_world_def *def, plait_error *
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "time_scale must be > 0, got %g",
 		                       (double)def->time_scale);
 	}
-	if ((def->alloc == NULL) != (def->free == NULL)) {
+	if (check_hooks && (def->alloc == NULL) != (def->free == NULL)) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
 		                       "alloc and free hooks must be set together");
 	}
@@ -110,7 +110,7 @@ plait_world_id plait_create_world(const plait_world_def *def, plait_error *error
 {
 	plait_world_id id = {NULL};
 	plait_error_clear(error);
-	if (validate_world_def(def, error) != PLAIT_OK) {
+	if (validate_world_def(def, true, error) != PLAIT_OK) {
 		return id;
 	}
 	plait_allocator allocator = {def->alloc, def->free, def->allocator_context};
@@ -166,7 +166,7 @@ plait_result plait_world_set_def(plait_world_id id, const plait_world_def *def, 
 	if (world == NULL) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ID, "null world id");
 	}
-	plait_result result = validate_world_def(def, error);
+	plait_result result = validate_world_def(def, false, error);
 	if (result != PLAIT_OK) {
 		return result;
 	}
