@@ -455,3 +455,13 @@ Test(scene_load, tethers_are_read_and_checked)
 	cr_assert(strstr(error.message, "objects[0].tethers") != NULL, "%s", error.message);
 	cr_assert(strstr(error.message, "geodesic") != NULL, "%s", error.message);
 }
+
+Test(scene_load, self_collide_is_read_for_cloth)
+{
+	plait_scene scene;
+	load("{\"objects\": [{\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	     " \"self_collide\": true}]}",
+	     &scene);
+	cr_assert(scene.objects[0].cloth.self_collide);
+	plait_scene_free(&scene);
+}

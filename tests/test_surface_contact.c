@@ -3,6 +3,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "test_support.h"
 
@@ -100,4 +101,68 @@ Test(surface_contact, destroying_a_cloth_keeps_the_other_surfaces_working)
 	cr_assert_geq(x.y, 0.005f + 0.005f + 0.01f - 2e-3f, "particle at y = %g fell through the remaining cloth",
 	              (double)x.y);
 	plait_destroy_world(world);
+}
+
+/* A sheet folded over itself: a lower layer at 2 cm, a crease, and an upper layer at 8 cm
+ * going back over it. Falling onto the ground, the upper layer must stay above the lower one:
+ * that is the cloth colliding with itself. */
+static double folded_sheet_gap(bool self_collide)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_collider_def ground = plait_default_collider_def();
+	plait_create_collider(world, &ground, NULL);
+	int nx = 6, rows = 6; /* quads per row; rows per layer */
+	int columns = nx + 1, row_count = 2 * rows + 2;
+	plait_vec3 *x = malloc(sizeof *x * (size_t)(columns * row_count));
+	for (int r = 0; r < row_count; ++r) {
+		bool upper = r > rows;
+		int k = upper ? row_count - 1 - r : r; /* the upper layer runs back over the lower */
+		float z = 0.5f * (float)k / (float)rows;
+		for (int c = 0; c < columns; ++c) {
+			x[r * columns + c] =
+			    (plait_vec3){0.5f * (float)c / (float)nx, upper ? 0.08f : 0.02f, upper ? z - 0.04f : z};
+		}
+	}
+	int face_count = nx * (row_count - 1);
+	int *sizes = malloc(sizeof(int) * (size_t)face_count),
+	    *indices = malloc(sizeof(int) * 4 * (size_t)face_count);
+	for (int f = 0, r = 0; r + 1 < row_count; ++r) {
+		for (int c = 0; c < nx; ++c, ++f) {
+			int a = r * columns + c;
+			sizes[f] = 4;
+			int quad[4] = {a, a + columns, a + columns + 1, a + 1};
+			memcpy(indices + 4 * f, quad, sizeof quad);
+		}
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = (plait_mesh_def){x, columns * row_count, sizes, face_count, indices};
+	def.surface.thickness = 0.004f;
+	def.self_collide = self_collide;
+	plait_error error;
+	plait_object_id cloth = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	cr_assert(test_step_frames(world, 36));
+	plait_object_get_positions(cloth, 0, columns * row_count, x, NULL);
+	/* The smallest height of an upper-layer vertex above the lower layer's middle vertices. */
+	double gap = INFINITY;
+	for (int r = rows + 3; r < row_count - 1; ++r) {
+		for (int c = 1; c < nx; ++c) {
+			gap = fmin(gap, (double)x[r * columns + c].y - (double)x[2 * columns + c].y);
+		}
+	}
+	plait_destroy_world(world);
+	free(x);
+	free(sizes);
+	free(indices);
+	return gap;
+}
+
+Test(surface_contact, a_cloth_folded_over_itself_keeps_its_layers_apart)
+{
+	double without = folded_sheet_gap(false), with = folded_sheet_gap(true);
+	cr_log_info("upper layer above the lower one: %.4f m without self-collision, %.4f m with", without, with);
+	cr_assert_lt(without, 0.004, "without self-collision the layers should meet or pass (%g)", without);
+	cr_assert_geq(with, 0.008 - 0.002, "with self-collision the layers sit two thicknesses apart (%g)", with);
 }

@@ -205,8 +205,10 @@ typedef struct plait_cloth_def {
 	int iterations;               /* stretch iterations per frame; 0 = from the stretch and compression
 	                               * resistances (0). Lets a stiff material run with few iterations. */
 	plait_tether_mode tethers;    /* (PLAIT_TETHER_NONE); built from the pins given here */
-	float tether_scale;           /* allowed distance / rest distance, 1..10 (1) */
-	float tether_stiffness;       /* share of a tether's excess removed per pass, 0..1 (1) */
+	bool self_collide;      /* its vertices collide with its own triangles (false); pairs closer than the
+	                         * thickness in the rest shape keep their rest separation instead */
+	float tether_scale;     /* allowed distance / rest distance, 1..10 (1) */
+	float tether_stiffness; /* share of a tether's excess removed per pass, 0..1 (1) */
 	plait_surface_def surface;
 	const int *pins; /* vertex indices held at their start position (targets settable later) */
 	int pin_count;

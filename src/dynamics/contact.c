@@ -89,7 +89,7 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 			++colliding_objects;
 			last_object = mat->object;
 		}
-		self_pairs = self_pairs || (mat->type == PLAIT_OBJECT_PARTICLES && mat->self_collide);
+		self_pairs = self_pairs || ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
 	}
 	sim->particle_pairs_active = colliding_objects >= 2 || self_pairs;
 	if (!sim->particle_pairs_active) {

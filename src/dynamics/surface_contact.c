@@ -165,6 +165,7 @@ typedef struct surface_pass {
 	int vertex, first;
 	const plait_mesh_shape *shape;
 	float distance_needed, friction;
+	int own_vertex; /* the vertex's index in this cloth when it is one of its own, else -1 */
 	int contacts;
 } surface_pass;
 
@@ -181,10 +182,28 @@ static void visit_triangle(int t, void *context)
 	int corners[3] = {pass->first + tri[0], pass->first + tri[1], pass->first + tri[2]};
 	plait_particles *p = pass->p;
 	int i = pass->vertex;
+	float distance_needed = pass->distance_needed;
+	if (pass->own_vertex >= 0) {
+		/* Self-collision: never against a triangle of the vertex itself, and never closer than
+		 * the two were in the rest shape (seed 000 §4.5), so neighbours and a cloth modelled
+		 * folded do not push apart. */
+		if (tri[0] == pass->own_vertex || tri[1] == pass->own_vertex || tri[2] == pass->own_vertex) {
+			return;
+		}
+		const vec3 *rest = pass->shape->positions;
+		int region;
+		vec3 q = plait_closest_point_on_triangle(rest[pass->own_vertex], rest[tri[0]], rest[tri[1]],
+		                                         rest[tri[2]], &region, NULL);
+		float rest_separation = v3_length(v3_sub(rest[pass->own_vertex], q));
+		distance_needed = plait_minf(distance_needed, rest_separation);
+		if (!(distance_needed > 0.0f)) {
+			return;
+		}
+	}
 	/* Fast relative motion may cross a triangle and end beside it: checked continuously. */
 	vec3 relative = v3_sub(v3_sub(p->x[i], p->x_prev[i]), v3_sub(p->x[corners[0]], p->x_prev[corners[0]]));
-	bool fast = v3_length(relative) >= pass->distance_needed;
-	pass->contacts += resolve_pair(p, i, corners, pass->distance_needed, pass->friction, fast);
+	bool fast = v3_length(relative) >= distance_needed;
+	pass->contacts += resolve_pair(p, i, corners, distance_needed, pass->friction, fast);
 }
 
 int plait_collide_surfaces(plait_sim *sim)
@@ -198,7 +217,8 @@ int plait_collide_surfaces(plait_sim *sim)
 	for (int s = 0; s < sim->surface_count; ++s) {
 		plait_surface *surface = &sim->surfaces[s];
 		const plait_material *surface_material = &sim->materials[surface->material];
-		if (!surface_material->collide || p->count == surface->shape->vertex_count) {
+		bool self = surface_material->self_collide;
+		if (!surface_material->collide || (p->count == surface->shape->vertex_count && !self)) {
 			continue; /* nothing else to touch it */
 		}
 		float thickness = surface_material->thickness;
@@ -206,7 +226,8 @@ int plait_collide_surfaces(plait_sim *sim)
 		refit(surface->shape, p, surface->first, thickness + max_radius);
 		int last = surface->first + surface->shape->vertex_count;
 		for (int i = 0; i < p->count; ++i) {
-			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || (i >= surface->first && i < last)) {
+			bool own = i >= surface->first && i < last;
+			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || (own && !self)) {
 				continue;
 			}
 			const plait_material *mat = &sim->materials[p->material[i]];
@@ -219,6 +240,7 @@ int plait_collide_surfaces(plait_sim *sim)
 			                     surface->shape,
 			                     p->radius[i] + thickness,
 			                     friction_of(mat, surface_material),
+			                     own ? i - surface->first : -1,
 			                     0};
 			plait_mesh_shape_visit(surface->shape, v3_min(p->x[i], p->x_prev[i]),
 			                       v3_max(p->x[i], p->x_prev[i]), false, visit_triangle, &pass);

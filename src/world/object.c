@@ -280,6 +280,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	mat->drag = def->drag;
 	mat->tangential_drag = def->tangential_drag;
 	mat->lift = def->lift;
+	mat->self_collide = def->self_collide;
 	object->material = material;
 	object->first_particle = sim->particles.count;
 	object->particle_count = vertex_count;

@@ -305,7 +305,7 @@ void plait_world_update_kinds(plait_world *world)
 			continue;
 		}
 		++colliding_objects;
-		self_pairs = self_pairs || (mat->type == PLAIT_OBJECT_PARTICLES && mat->self_collide);
+		self_pairs = self_pairs || ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
 	}
 	sim->kind_active[PLAIT_KIND_COLLISION] =
 	    (any_collider && colliding_objects > 0) || colliding_objects >= 2 || self_pairs;

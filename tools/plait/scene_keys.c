@@ -88,6 +88,7 @@ static const plait_scene_key plait_cloth_keys[] = {
     PLAIT_SPECIAL("tethers", false),
     PLAIT_FLOAT("tether_scale", PLAIT_BETWEEN(1, 10), plait_cloth_def, tether_scale),
     PLAIT_FLOAT("tether_stiffness", PLAIT_BETWEEN(0, 1), plait_cloth_def, tether_stiffness),
+    PLAIT_BOOL("self_collide", plait_cloth_def, self_collide),
 };
 
 static const plait_scene_key plait_grid_keys[] = {
