@@ -232,6 +232,35 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 	free(dir);
 }
 
+Test(cli_run, check_adds_intersection_counts_to_stats)
+{
+	char *dir = make_temp_dir();
+	char *scene = write_scene(dir, tiny_scene);
+	const char *argv[] = {"plait", "run", scene, "--out", dir, "--frames", "3", "--check"};
+	cli_result r = run_cli(8, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	char path[1024];
+	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
+	char *text = read_file(path, NULL);
+	cr_assert_not_null(text);
+	int lines = 0;
+	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
+		json_error_t error;
+		json_t *json = json_loads(line, 0, &error);
+		cr_assert_not_null(json, "line %d is not JSON: %s", lines, line);
+		cr_expect(json_is_integer(json_object_get(json, "intersections")), "line %d: %s", lines, line);
+		cr_expect(json_is_integer(json_object_get(json, "inside_colliders")), "line %d: %s", lines, line);
+		json_decref(json);
+		++lines;
+	}
+	cr_expect_eq(lines, 4);
+	free(text);
+	free_result(&r);
+	free(scene);
+	remove_tree(dir);
+	free(dir);
+}
+
 static uint32_t read_u32(const unsigned char *p)
 {
 	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;

@@ -345,6 +345,17 @@ typedef struct plait_frame_stats {
 
 plait_frame_stats plait_world_get_stats(plait_world_id world);
 
+/* An intersection check of the current state (for tests and users, not used by the solver). */
+typedef struct plait_intersection_report {
+	int triangle_pairs;   /* pairs of cloth triangles that intersect: between cloths, and within
+	                       * one cloth for triangles that share no vertex */
+	int inside_colliders; /* vertices inside a collider (below a plane, inside a shape) by more
+	                       * than 1e-4 scene units plus 1% of their radius */
+} plait_intersection_report;
+
+plait_result plait_world_check_intersections(plait_world_id world, plait_intersection_report *report,
+                                             plait_error *error);
+
 #ifdef __cplusplus
 }
 #endif

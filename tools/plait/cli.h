@@ -22,6 +22,7 @@ typedef struct plait_run_options {
 	int frames; /* < 0: as many as the scene says */
 	const plait_writer_format *format;
 	bool progress; /* a progress line on err, rewritten in place */
+	bool check;    /* count intersections every frame into stats.jsonl */
 } plait_run_options;
 
 /* `plait run` once its arguments are parsed; returns an exit code. */

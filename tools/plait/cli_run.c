@@ -12,7 +12,7 @@
 
 static void plait_run_usage(FILE *f)
 {
-	fprintf(f, "usage: plait run [SCENE.json] [--out DIR] [--frames N] [--format obj|pc2]\n");
+	fprintf(f, "usage: plait run [SCENE.json] [--out DIR] [--frames N] [--format obj|pc2] [--check]\n");
 }
 
 static void plait_run_help(FILE *f)
@@ -24,6 +24,8 @@ static void plait_run_help(FILE *f)
 	           "  --frames N       frames to simulate (default: the scene's \"frames\")\n"
 	           "  --format FORMAT  obj: DIR/NAME.FRAME.obj per object and frame (default)\n"
 	           "                   pc2: DIR/NAME.pc2 point cache per object\n"
+	           "  --check          count, every frame, crossing cloth triangles (between cloths and\n"
+	           "                   within each) and vertices inside colliders, into stats.jsonl\n"
 	           "  -h, --help       this help\n\n"
 	           "Exit status: 0 done, 1 scene error or failed simulation, 2 bad arguments.\n");
 }
@@ -64,6 +66,8 @@ int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 		if (strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0) {
 			plait_run_help(out);
 			return PLAIT_EXIT_OK;
+		} else if (strcmp(arg, "--check") == 0) {
+			options.check = true;
 		} else if ((value = plait_option_value(argc, argv, &i, "--out", &missing)) != NULL) {
 			if (value[0] == '\0') {
 				fprintf(err, "plait run: --out needs a folder name\n");
@@ -119,14 +123,21 @@ static void plait_run_progress(FILE *err, int frame, int frames, double step_ms,
 typedef struct plait_run_outputs {
 	plait_writer *writer;
 	plait_stats_log stats;
+	bool check;
 } plait_run_outputs;
 
 static bool plait_run_write(plait_run_outputs *outputs, plait_world_id world, int frame, double ms,
                             plait_tool_error *error)
 {
 	plait_frame_stats stats = plait_world_get_stats(world);
+	plait_intersection_report report;
+	if (outputs->check) {
+		plait_error core_error;
+		if (plait_world_check_intersections(world, &report, &core_error) != PLAIT_OK)
+			return plait_tool_error_set(error, "frame %d: intersection check: %s", frame, core_error.message);
+	}
 	return plait_writer_write_frame(outputs->writer, frame, error) &&
-	       plait_stats_log_write(&outputs->stats, frame, ms, &stats, error);
+	       plait_stats_log_write(&outputs->stats, frame, ms, &stats, outputs->check ? &report : NULL, error);
 }
 
 int plait_run(const plait_run_options *options, FILE *out, FILE *err)
@@ -151,6 +162,7 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 		return PLAIT_EXIT_FAILURE;
 	}
 	plait_run_outputs outputs = {0};
+	outputs.check = options->check;
 	if (!plait_make_dirs(options->out_dir, &error) ||
 	    !plait_stats_log_open(&outputs.stats, options->out_dir, &error)) {
 		fprintf(err, "plait: %s\n", error.message);

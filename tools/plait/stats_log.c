@@ -18,7 +18,7 @@ static void plait_json_number(FILE *f, double v)
 }
 
 bool plait_stats_log_write(plait_stats_log *log, int frame, double step_ms, const plait_frame_stats *stats,
-                           plait_tool_error *error)
+                           const plait_intersection_report *check, plait_tool_error *error)
 {
 	FILE *f = log->file.file;
 	fprintf(f, "{\"frame\":%d,\"ms\":", frame);
@@ -27,8 +27,12 @@ bool plait_stats_log_write(plait_stats_log *log, int frame, double step_ms, cons
 	plait_json_number(f, stats->kinetic_energy);
 	fputs(",\"max_strain\":", f);
 	plait_json_number(f, stats->max_strain);
-	fprintf(f, ",\"penetrations\":%d,\"nonfinite\":%d,\"contacts\":%d}\n", stats->penetrations,
-	        stats->nonfinite, stats->contacts);
+	fprintf(f, ",\"penetrations\":%d,\"nonfinite\":%d,\"contacts\":%d", stats->penetrations, stats->nonfinite,
+	        stats->contacts);
+	if (check != NULL)
+		fprintf(f, ",\"intersections\":%d,\"inside_colliders\":%d", check->triangle_pairs,
+		        check->inside_colliders);
+	fputs("}\n", f);
 	if (ferror(f))
 		return plait_tool_error_set(error, "%s: cannot write", log->file.temp_path);
 	return true;

@@ -1,0 +1,110 @@
+/* plait_world_check_intersections: counts crossing cloth triangles with a hierarchy over all of
+ * them, built from the current positions. */
+#include <string.h>
+
+#include "collision/intersect.h"
+#include "collision/mesh_shape.h"
+#include "core/error.h"
+#include "dynamics/contact.h"
+#include "world/world.h"
+
+typedef struct check_pass {
+	const plait_mesh_shape *shape;
+	int triangle;
+	int count;
+} check_pass;
+
+static bool share_a_vertex(const int *a, const int *b)
+{
+	for (int i = 0; i < 3; ++i) {
+		for (int j = 0; j < 3; ++j) {
+			if (a[i] == b[j]) {
+				return true;
+			}
+		}
+	}
+	return false;
+}
+
+static void visit_pair(int other, void *context)
+{
+	check_pass *pass = context;
+	if (other <= pass->triangle) {
+		return; /* each pair once */
+	}
+	const int *a = pass->shape->triangles[pass->triangle], *b = pass->shape->triangles[other];
+	if (share_a_vertex(a, b)) {
+		return; /* neighbours touch by construction */
+	}
+	const vec3 *x = pass->shape->positions;
+	vec3 t[3] = {x[a[0]], x[a[1]], x[a[2]]}, u[3] = {x[b[0]], x[b[1]], x[b[2]]};
+	pass->count += plait_triangles_intersect(t, u);
+}
+
+plait_result plait_world_check_intersections(plait_world_id id, plait_intersection_report *report,
+                                             plait_error *error)
+{
+	plait_world *world = id.world;
+	if (world == NULL || report == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "check needs a world and a report");
+	}
+	memset(report, 0, sizeof *report);
+	report->inside_colliders = plait_count_penetrations(&world->sim);
+	/* One soup of every colliding cloth's polygons, indexed by particle. */
+	int faces = 0, indices = 0;
+	for (int o = 0; o < world->object_count; ++o) {
+		const plait_object *object = &world->objects[o];
+		if (object->alive && object->type == PLAIT_OBJECT_CLOTH &&
+		    world->sim.materials[object->material].collide) {
+			faces += object->topology.polygon_count;
+			indices += object->topology.polygon_index_count;
+		}
+	}
+	if (faces == 0) {
+		return PLAIT_OK;
+	}
+	const plait_allocator *a = &world->allocator;
+	int *sizes = plait_alloc(a, sizeof(int) * (size_t)faces);
+	int *soup = plait_alloc(a, sizeof(int) * (size_t)indices);
+	if (sizes == NULL || soup == NULL) {
+		plait_free(a, sizes);
+		plait_free(a, soup);
+		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory checking intersections");
+	}
+	int f = 0, k = 0;
+	for (int o = 0; o < world->object_count; ++o) {
+		const plait_object *object = &world->objects[o];
+		if (!object->alive || object->type != PLAIT_OBJECT_CLOTH ||
+		    !world->sim.materials[object->material].collide) {
+			continue;
+		}
+		const plait_topology *t = &object->topology;
+		for (int p = 0; p < t->polygon_count; ++p) {
+			sizes[f++] = t->polygon_sizes[p];
+		}
+		for (int i = 0; i < t->polygon_index_count; ++i) {
+			soup[k++] = object->first_particle + t->polygon_indices[i];
+		}
+	}
+	plait_mesh_def mesh = {world->sim.particles.x, world->sim.particles.count, sizes, faces, soup};
+	plait_mesh_shape shape;
+	plait_result result = plait_mesh_shape_build(&shape, a, &mesh, error);
+	plait_free(a, sizes);
+	plait_free(a, soup);
+	if (result != PLAIT_OK) {
+		return result;
+	}
+	check_pass pass = {&shape, 0, 0};
+	for (int t = 0; t < shape.triangle_count; ++t) {
+		const int *tri = shape.triangles[t];
+		vec3 lower =
+		    v3_min(shape.positions[tri[0]], v3_min(shape.positions[tri[1]], shape.positions[tri[2]]));
+		vec3 upper =
+		    v3_max(shape.positions[tri[0]], v3_max(shape.positions[tri[1]], shape.positions[tri[2]]));
+		pass.triangle = t;
+		plait_mesh_shape_visit(&shape, lower, upper, true, visit_pair, &pass);
+	}
+	report->triangle_pairs = pass.count;
+	plait_mesh_shape_destroy(&shape, a);
+	return PLAIT_OK;
+}
