@@ -67,12 +67,13 @@ static bool materials_pair_up(const plait_material *a, const plait_material *b)
 bool plait_contacts_begin_substep(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
-	/* What touched a collider in the last substep is held by it in this one (see
+	/* What rested on a plane collider in the last substep is held by it in this one (see
 	 * surface_contact.c); contacts of this substep start afresh. */
 	for (int i = 0; i < p->count; ++i) {
-		uint8_t flags = p->flags[i] & (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED);
+		uint8_t flags = p->flags[i] & (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED |
+		                                          PLAIT_PARTICLE_ON_PLANE);
 		p->flags[i] =
-		    (p->flags[i] & PLAIT_PARTICLE_CONTACT) ? (uint8_t)(flags | PLAIT_PARTICLE_SUPPORTED) : flags;
+		    (p->flags[i] & PLAIT_PARTICLE_ON_PLANE) ? (uint8_t)(flags | PLAIT_PARTICLE_SUPPORTED) : flags;
 	}
 	sim->pair_contact_count = 0;
 
@@ -89,7 +90,9 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 			++colliding_objects;
 			last_object = mat->object;
 		}
-		self_pairs = self_pairs || ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
+		self_pairs =
+		    self_pairs ||
+		    ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
 	}
 	sim->particle_pairs_active = colliding_objects >= 2 || self_pairs;
 	if (!sim->particle_pairs_active) {
@@ -340,6 +343,9 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
 		p->x[i] = plait_rigid_apply(r1, v3_add(p1, correction));
 		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
+		if (c->shape.type == PLAIT_SHAPE_PLANE) {
+			p->flags[i] |= PLAIT_PARTICLE_ON_PLANE;
+		}
 		++contacts;
 	}
 	return contacts;

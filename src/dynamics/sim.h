@@ -15,7 +15,8 @@ enum {
 	PLAIT_PARTICLE_PINNED = 1,    /* kinematic: follows pin_start -> pin_end over the frame */
 	PLAIT_PARTICLE_COLLIDE = 2,   /* takes part in collisions */
 	PLAIT_PARTICLE_CONTACT = 4,   /* touched something in the current substep */
-	PLAIT_PARTICLE_SUPPORTED = 8, /* touched a collider in the previous substep */
+	PLAIT_PARTICLE_SUPPORTED = 8, /* rested on a plane collider in the previous substep */
+	PLAIT_PARTICLE_ON_PLANE = 16, /* touched a plane collider in the current substep */
 };
 
 /* Per-object attributes the solver needs per particle (indexed by particles.material). */

@@ -102,7 +102,8 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 	float side = v3_dot(v3_sub(p->x_prev[i], q0), face0) >= 0.0f ? 1.0f : -1.0f;
 	vec3 n = v3_scale(face, side);
 	float distance = v3_dot(v3_sub(p->x[i], q), n);
-	bool beside = region != 0 && v3_length(v3_sub(p->x[i], q)) >= distance_needed;
+	float reach = v3_length(v3_sub(p->x[i], q));
+	bool beside = region != 0 && reach >= distance_needed;
 	/* Ending beside the triangle out of reach, or far behind its plane, is a crossing only if
 	 * the path really went through the thickened triangle: ask the continuous test. (A vertex
 	 * may end behind the plane of a triangle it never touched, having gone round the sheet.) */
@@ -113,23 +114,38 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 		if (!swept_through(p, i, corners, distance_needed)) {
 			return false;
 		}
+	} else if (region != 0) {
+		/* Within reach of an edge or corner: apart along the line to it (for a vertex in the
+		 * sheet's own plane, that is within the plane, not out of it). */
+		if (reach > 1e-7f) {
+			n = v3_scale(v3_sub(p->x[i], q), 1.0f / reach);
+		}
+		distance = reach;
 	}
 	float depth = distance_needed - distance;
 	if (depth <= 0.0f) {
 		return false;
 	}
-	/* A vertex that rested on a collider in the last substep is supported: it does not give way
-	 * (the collider would only push it back), which lets layers stack on the ground. */
+	/* A vertex that rested on a plane collider (the ground, a table) in the last substep is
+	 * held by it against being pushed into it: it does not give way in that direction (the
+	 * plane would only push it back), which lets layers stack on the ground. Pushed away from
+	 * it, it moves as usual; were every participant held, the real masses decide. Curved
+	 * colliders do not hold: on them the last normal is a poor guide where cloth folds, and
+	 * holding there tangled draped cloths. */
+	const vec3 *toward = p->contact_normal;
 	float wi = p->w[i], wk[3];
-	bool any_free = !(p->flags[i] & PLAIT_PARTICLE_SUPPORTED) && wi > 0.0f;
+	bool i_held = (p->flags[i] & PLAIT_PARTICLE_SUPPORTED) && v3_dot(n, toward[i]) < 0.0f;
+	bool k_held[3];
+	bool any_free = !i_held && wi > 0.0f;
 	for (int k = 0; k < 3; ++k) {
 		wk[k] = p->w[corners[k]];
-		any_free = any_free || (!(p->flags[corners[k]] & PLAIT_PARTICLE_SUPPORTED) && wk[k] > 0.0f);
+		k_held[k] = (p->flags[corners[k]] & PLAIT_PARTICLE_SUPPORTED) && v3_dot(n, toward[corners[k]]) > 0.0f;
+		any_free = any_free || (!k_held[k] && wk[k] > 0.0f);
 	}
 	if (any_free) {
-		wi = (p->flags[i] & PLAIT_PARTICLE_SUPPORTED) ? 0.0f : wi;
+		wi = i_held ? 0.0f : wi;
 		for (int k = 0; k < 3; ++k) {
-			wk[k] = (p->flags[corners[k]] & PLAIT_PARTICLE_SUPPORTED) ? 0.0f : wk[k];
+			wk[k] = k_held[k] ? 0.0f : wk[k];
 		}
 	}
 	float denominator = wi;
@@ -184,9 +200,9 @@ static void visit_triangle(int t, void *context)
 	int i = pass->vertex;
 	float distance_needed = pass->distance_needed;
 	if (pass->own_vertex >= 0) {
-		/* Self-collision: never against a triangle of the vertex itself, and never closer than
-		 * the two were in the rest shape (seed 000 §4.5), so neighbours and a cloth modelled
-		 * folded do not push apart. */
+		/* Self-collision: never against a triangle of the vertex itself, nor against one that
+		 * was within twice the contact distance of it in the rest shape (so neighbours, and a
+		 * cloth modelled folded, do not push apart: seed 000 §4.5). */
 		if (tri[0] == pass->own_vertex || tri[1] == pass->own_vertex || tri[2] == pass->own_vertex) {
 			return;
 		}
@@ -195,8 +211,10 @@ static void visit_triangle(int t, void *context)
 		vec3 q = plait_closest_point_on_triangle(rest[pass->own_vertex], rest[tri[0]], rest[tri[1]],
 		                                         rest[tri[2]], &region, NULL);
 		float rest_separation = v3_length(v3_sub(rest[pass->own_vertex], q));
-		distance_needed = plait_minf(distance_needed, rest_separation);
-		if (!(distance_needed > 0.0f)) {
+		/* Neighbours in the rest shape lie nearly in one plane, where "which side" is ill
+		 * defined and pushing makes cloth buckle and gain energy; they are left to the
+		 * cloth's own stretch and bend. */
+		if (rest_separation < 2.0f * distance_needed) {
 			return;
 		}
 	}
