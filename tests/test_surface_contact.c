@@ -30,6 +30,7 @@ Test(surface_contact, a_cloth_falling_on_another_stays_on_top)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.air_density = 0.0f;
+	wdef.cloth_contacts = true;
 	plait_world_id world = plait_create_world(&wdef, NULL);
 	plait_collider_def ground = plait_default_collider_def();
 	plait_create_collider(world, &ground, NULL);
@@ -62,6 +63,7 @@ Test(surface_contact, particles_rest_on_a_cloth_lying_on_the_ground)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.air_density = 0.0f;
+	wdef.cloth_contacts = true;
 	plait_world_id world = plait_create_world(&wdef, NULL);
 	plait_collider_def ground = plait_default_collider_def();
 	plait_create_collider(world, &ground, NULL);
@@ -87,6 +89,7 @@ Test(surface_contact, destroying_a_cloth_keeps_the_other_surfaces_working)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.air_density = 0.0f;
+	wdef.cloth_contacts = true;
 	plait_world_id world = plait_create_world(&wdef, NULL);
 	plait_collider_def ground = plait_default_collider_def();
 	plait_create_collider(world, &ground, NULL);

@@ -103,6 +103,11 @@ typedef struct plait_world_def {
 	float space_scale; /* metres per scene unit, > 0 (1) */
 	float time_scale;  /* simulated seconds per real second of frame time, > 0 (1) */
 	uint32_t seed;     /* seed of the wind noise (0) */
+	/* Vertices of any object against the triangles of other cloths (false). Experimental: it
+	 * keeps stacked sheets and particles on cloth apart, but cloths draped over each other on a
+	 * curved collider can still gain energy; see docs/architecture.md. Self-collision of a cloth
+	 * is its own flag, plait_cloth_def.self_collide. */
+	bool cloth_contacts;
 
 	plait_alloc_fn *alloc;
 	plait_free_fn *free;

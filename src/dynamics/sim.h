@@ -154,6 +154,7 @@ typedef struct plait_settings {
 	vec3 wind_velocity; /* scene units / s */
 	float wind_noise;
 	uint32_t seed;
+	bool cloth_contacts;
 } plait_settings;
 
 typedef struct plait_sim {

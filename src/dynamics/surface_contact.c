@@ -236,8 +236,9 @@ int plait_collide_surfaces(plait_sim *sim)
 		plait_surface *surface = &sim->surfaces[s];
 		const plait_material *surface_material = &sim->materials[surface->material];
 		bool self = surface_material->self_collide;
-		if (!surface_material->collide || (p->count == surface->shape->vertex_count && !self)) {
-			continue; /* nothing else to touch it */
+		bool others = sim->settings.cloth_contacts && p->count > surface->shape->vertex_count;
+		if (!surface_material->collide || (!others && !self)) {
+			continue; /* nothing to touch it */
 		}
 		float thickness = surface_material->thickness;
 		/* Grown by the thickest possible pair, so a vertex is found from its own swept box. */
@@ -245,7 +246,7 @@ int plait_collide_surfaces(plait_sim *sim)
 		int last = surface->first + surface->shape->vertex_count;
 		for (int i = 0; i < p->count; ++i) {
 			bool own = i >= surface->first && i < last;
-			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || (own && !self)) {
+			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || (own && !self) || (!own && !others)) {
 				continue;
 			}
 			const plait_material *mat = &sim->materials[p->material[i]];

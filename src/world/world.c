@@ -103,6 +103,7 @@ static void apply_settings(plait_world *world)
 	s->wind_velocity = v3_scale(direction, def->wind.speed * inverse_scale);
 	s->wind_noise = def->wind.noise;
 	s->seed = def->seed;
+	s->cloth_contacts = def->cloth_contacts;
 	world->sim.schedule_dirty = true;
 }
 

@@ -60,6 +60,7 @@ static const plait_scene_key plait_world_keys[] = {
     PLAIT_FLOAT("space_scale", PLAIT_ABOVE(0), plait_world_def, space_scale),
     PLAIT_FLOAT("time_scale", PLAIT_ABOVE(0), plait_world_def, time_scale),
     {"seed", PLAIT_KEY_UINT32, PLAIT_BETWEEN(0, 4294967295.0), offsetof(plait_world_def, seed), false},
+    PLAIT_BOOL("cloth_contacts", plait_world_def, cloth_contacts),
 };
 
 static const plait_scene_key plait_wind_keys[] = {
