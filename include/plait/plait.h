@@ -348,6 +348,8 @@ typedef struct plait_frame_stats {
 	int constraint_solves; /* constraint projections performed in the frame */
 } plait_frame_stats;
 
+/* Measures of the current state (energy, strain, penetrations, non-finite values: taken when
+ * called, so a step costs nothing for them) and the counters of the last frame. */
 plait_frame_stats plait_world_get_stats(plait_world_id world);
 
 /* An intersection check of the current state (for tests and users, not used by the solver). */

@@ -194,12 +194,7 @@ plait_result plait_world_step(plait_world_id id, plait_error *error)
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ID, "null world id");
 	}
 	plait_result result = plait_sim_step(&world->sim, error);
-	plait_sim_stats measured = plait_sim_measure(&world->sim);
-	world->stats.frame = world->sim.frame;
-	world->stats.kinetic_energy = measured.kinetic_energy;
-	world->stats.max_strain = measured.max_strain;
-	world->stats.penetrations = measured.penetrations;
-	world->stats.nonfinite = measured.nonfinite;
+	/* Counters of the frame; the measures of the state are taken when someone asks. */
 	world->stats.contacts = world->sim.contacts;
 	world->stats.constraint_solves = world->sim.constraint_solves;
 	return result;
@@ -224,14 +219,14 @@ plait_frame_stats plait_world_get_stats(plait_world_id id)
 	if (world == NULL) {
 		return empty;
 	}
-	if (world->stats.frame == 0 && world->sim.frame == 0) {
-		plait_sim_stats measured = plait_sim_measure(&world->sim);
-		world->stats.kinetic_energy = measured.kinetic_energy;
-		world->stats.max_strain = measured.max_strain;
-		world->stats.penetrations = measured.penetrations;
-		world->stats.nonfinite = measured.nonfinite;
-	}
-	return world->stats;
+	plait_sim_stats measured = plait_sim_measure(&world->sim);
+	plait_frame_stats stats = world->stats;
+	stats.frame = world->sim.frame;
+	stats.kinetic_energy = measured.kinetic_energy;
+	stats.max_strain = measured.max_strain;
+	stats.penetrations = measured.penetrations;
+	stats.nonfinite = measured.nonfinite;
+	return stats;
 }
 
 int plait_world_get_substep_count(plait_world_id id)
@@ -306,7 +301,9 @@ void plait_world_update_kinds(plait_world *world)
 			continue;
 		}
 		++colliding_objects;
-		self_pairs = self_pairs || ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
+		self_pairs =
+		    self_pairs ||
+		    ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
 	}
 	sim->kind_active[PLAIT_KIND_COLLISION] =
 	    (any_collider && colliding_objects > 0) || colliding_objects >= 2 || self_pairs;
