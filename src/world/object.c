@@ -59,6 +59,27 @@ static plait_result check_surface(plait_error *error, const char *object, const 
 	return PLAIT_OK;
 }
 
+/* The attributes cloth and curves share: resistances, rest length scale, drag, damping and the
+ * iteration override. */
+static plait_result check_deformable(plait_error *error, const char *label, float stretch, float compression,
+                                     float bend, float rest_length_scale, float drag, float damp,
+                                     int iterations)
+{
+	plait_result r;
+	if ((r = check_range(error, label, "stretch_resistance", stretch, 0.0f, MAX_RESISTANCE)) != PLAIT_OK ||
+	    (r = check_range(error, label, "compression_resistance", compression, 0.0f, MAX_RESISTANCE)) !=
+	        PLAIT_OK ||
+	    (r = check_range(error, label, "bend_resistance", bend, 0.0f, MAX_RESISTANCE)) != PLAIT_OK ||
+	    (r = check_range(error, label, "rest_length_scale", rest_length_scale, 0.01f, 10.0f)) != PLAIT_OK ||
+	    (r = check_range(error, label, "drag", drag, 0.0f, 1e6f)) != PLAIT_OK ||
+	    (r = check_range(error, label, "damp", damp, 0.0f, 100.0f)) != PLAIT_OK ||
+	    (r = check_range(error, label, "iterations", (float)iterations, 0.0f, (float)PLAIT_MAX_IMPORTANCE)) !=
+	        PLAIT_OK) {
+		return r;
+	}
+	return PLAIT_OK;
+}
+
 static plait_result check_positions(plait_error *error, const char *object, const char *field,
                                     const plait_vec3 *positions, int count)
 {
@@ -171,21 +192,13 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	    (def->velocities != NULL &&
 	     check_positions(error, label, "velocities", def->velocities, mesh->vertex_count) != PLAIT_OK) ||
 	    check_range(error, label, "density", def->density, 1e-9f, 1e6f) != PLAIT_OK ||
-	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) !=
-	        PLAIT_OK ||
-	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f,
-	                MAX_RESISTANCE) != PLAIT_OK ||
+	    check_deformable(error, label, def->stretch_resistance, def->compression_resistance,
+	                     def->bend_resistance, def->rest_length_scale, def->drag, def->damp,
+	                     def->iterations) != PLAIT_OK ||
 	    check_range(error, label, "shear_resistance", def->shear_resistance, 0.0f, MAX_RESISTANCE) !=
 	        PLAIT_OK ||
-	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) !=
-	        PLAIT_OK ||
-	    check_range(error, label, "rest_length_scale", def->rest_length_scale, 0.01f, 10.0f) != PLAIT_OK ||
-	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "tangential_drag", def->tangential_drag, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "lift", def->lift, 0.0f, 1e6f) != PLAIT_OK ||
-	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
-	    check_range(error, label, "iterations", (float)def->iterations, 0.0f, (float)PLAIT_MAX_IMPORTANCE) !=
-	        PLAIT_OK ||
 	    check_range(error, label, "tether_scale", def->tether_scale, 1.0f, 10.0f) != PLAIT_OK ||
 	    check_range(error, label, "tether_stiffness", def->tether_stiffness, 0.0f, 1.0f) != PLAIT_OK ||
 	    check_surface(error, label, &def->surface) != PLAIT_OK ||
@@ -479,17 +492,9 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	    (def->velocities != NULL &&
 	     check_positions(error, label, "velocities", def->velocities, n) != PLAIT_OK) ||
 	    check_range(error, label, "mass", def->mass, 1e-12f, 1e9f) != PLAIT_OK ||
-	    check_range(error, label, "stretch_resistance", def->stretch_resistance, 0.0f, MAX_RESISTANCE) !=
-	        PLAIT_OK ||
-	    check_range(error, label, "compression_resistance", def->compression_resistance, 0.0f,
-	                MAX_RESISTANCE) != PLAIT_OK ||
-	    check_range(error, label, "bend_resistance", def->bend_resistance, 0.0f, MAX_RESISTANCE) !=
-	        PLAIT_OK ||
-	    check_range(error, label, "rest_length_scale", def->rest_length_scale, 0.01f, 10.0f) != PLAIT_OK ||
-	    check_range(error, label, "drag", def->drag, 0.0f, 1e6f) != PLAIT_OK ||
-	    check_range(error, label, "damp", def->damp, 0.0f, 100.0f) != PLAIT_OK ||
-	    check_range(error, label, "iterations", (float)def->iterations, 0.0f, (float)PLAIT_MAX_IMPORTANCE) !=
-	        PLAIT_OK ||
+	    check_deformable(error, label, def->stretch_resistance, def->compression_resistance,
+	                     def->bend_resistance, def->rest_length_scale, def->drag, def->damp,
+	                     def->iterations) != PLAIT_OK ||
 	    check_surface(error, label, &def->surface) != PLAIT_OK ||
 	    check_pins(error, label, def->pins, def->pin_count, n) != PLAIT_OK) {
 		return id;
