@@ -93,6 +93,15 @@ typedef struct plait_wind_def {
 	float noise;          /* 0..1 (up to 10): random turbulence as a fraction of speed */
 } plait_wind_def;
 
+/* Instruction set of the solver's hot kernels. Every level gives bit-identical results; AUTO
+ * picks the widest this processor runs. Asking for a level the processor lacks is an error. */
+typedef enum plait_simd {
+	PLAIT_SIMD_AUTO = 0,
+	PLAIT_SIMD_SCALAR, /* portable C */
+	PLAIT_SIMD_AVX2,   /* x86-64 with AVX2: 8 lanes */
+	PLAIT_SIMD_AVX512, /* x86-64 with AVX-512F: 16 lanes */
+} plait_simd;
+
 typedef struct plait_world_def {
 	float fps;                    /* frames per second, > 0 (24) */
 	int substeps;                 /* substeps per frame, 1..1000 (3) */
@@ -117,6 +126,7 @@ typedef struct plait_world_def {
 	plait_finish_task_fn *finish_task;
 	void *task_context;
 	int worker_count; /* threads the task system offers, >= 1 (1) */
+	plait_simd simd;  /* PLAIT_SIMD_AUTO */
 
 	int internal_value; /* set by plait_default_world_def(); checks the def was initialised */
 } plait_world_def;
@@ -131,6 +141,11 @@ bool plait_world_is_valid(plait_world_id world);
  * particle became non-finite, or PLAIT_ERROR_OUT_OF_MEMORY; the positions and velocities are
  * then left as they were at the start of the frame. */
 plait_result plait_world_step(plait_world_id world, plait_error *error);
+
+/* The instruction set the world's kernels run with (never AUTO), and whether a level runs on
+ * this processor. */
+plait_simd plait_world_get_simd(plait_world_id world);
+bool plait_simd_is_supported(plait_simd simd);
 
 /* Current frame number (0 after creation) and simulated time in seconds. */
 int plait_world_get_frame(plait_world_id world);
@@ -189,6 +204,17 @@ typedef enum plait_tether_mode {
 	PLAIT_TETHER_GEODESIC,  /* nearest pin and distance along the mesh's edges */
 } plait_tether_mode;
 
+/* How a cloth resists bending. */
+typedef enum plait_bend_model {
+	/* The signed angle between the two triangles of each interior edge, against its rest value;
+	 * bend_resistance R gives a bending stiffness of R x 1e-4 N m. */
+	PLAIT_BEND_DIHEDRAL = 0,
+	/* The distance between the two ends of each pair of edges that continue each other (two
+	 * edges apart along a line of the mesh): bend_resistance R gives R x 100 N/m, as stretch.
+	 * Cheaper, and what mass-spring and NvCloth cloth use; it cannot tell up from down. */
+	PLAIT_BEND_DISTANCE,
+} plait_bend_model;
+
 typedef struct plait_cloth_def {
 	const char *name;
 	plait_mesh_def mesh;
@@ -202,6 +228,7 @@ typedef struct plait_cloth_def {
 	float compression_resistance; /* 0..10000 (10) */
 	float shear_resistance;       /* 0..10000 (10) */
 	float bend_resistance;        /* 0..10000 (0.1) */
+	plait_bend_model bend_model;  /* (PLAIT_BEND_DIHEDRAL) */
 	float rest_length_scale;      /* 0.01..10 (1) */
 	float drag;                   /* normal air drag coefficient, >= 0 (0.05) */
 	float tangential_drag;        /* >= 0 (0.01) */

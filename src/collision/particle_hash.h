@@ -33,8 +33,9 @@ void plait_particle_hash_destroy(plait_particle_hash *hash, const plait_allocato
 
 /* Enters particles[0..count) at the centres of their boxes [lower[k], upper[k]]. False when out
  * of memory. */
-bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator *allocator, const int *particles,
-                               const vec3 *lower, const vec3 *upper, int count, float cell_size);
+bool plait_particle_hash_build(plait_particle_hash *hash, const plait_allocator *allocator,
+                               const int *particles, const vec3 *lower, const vec3 *upper, int count,
+                               float cell_size);
 
 int plait_particle_hash_bucket(const plait_particle_hash *hash, plait_hash_cell cell);
 

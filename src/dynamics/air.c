@@ -102,7 +102,7 @@ void plait_air_accumulate(plait_sim *sim, double time)
 			continue;
 		}
 		const int *tri = sim->aero.triangle[t];
-		vec3 a = p->x[tri[0]], b = p->x[tri[1]], c = p->x[tri[2]];
+		vec3 a = p->point[tri[0]].x, b = p->point[tri[1]].x, c = p->point[tri[2]].x;
 		vec3 normal = v3_cross(v3_sub(b, a), v3_sub(c, a));
 		float twice_area = v3_length(normal);
 		if (twice_area <= 0.0f) {
@@ -194,7 +194,7 @@ void plait_integrate_velocities(plait_sim *sim, float h, bool air)
 	plait_particles *p = &sim->particles;
 	vec3 gravity = sim->settings.gravity;
 	for (int i = 0; i < p->count; ++i) {
-		if (p->w[i] == 0.0f) {
+		if (p->point[i].w == 0.0f) {
 			continue;
 		}
 		vec3 v = p->v[i];

@@ -1,116 +1,84 @@
 #include "dynamics/constraints.h"
 
-/* One projection of distance constraint c (see the header for the update). */
-static inline void project_distance(plait_distance_block *block, vec3 *x, const float *w, int c,
-                                    float inverse_h_squared)
+#include "dynamics/colouring.h"
+#include "dynamics/distance_kernel.h"
+
+/* Constraints per chunk of a parallel loop: large enough that claiming a chunk costs little
+ * next to projecting it, small enough that a colour splits over the workers. A multiple of 16,
+ * so chunks keep whole SIMD batches. */
+#define DISTANCE_GRAIN 1024
+#define BEND_GRAIN 256
+#define LANES 8 /* hinges per bend batch (the compiler vectorises the lane loops) */
+
+typedef struct distance_job {
+	plait_distance_kernel *kernel;
+	plait_distance_block *block;
+	plait_point *points;
+	float inverse_h_squared;
+	bool backward;
+} distance_job;
+
+/* Constraints [begin, end) of one run: they share no particle. */
+static void distance_range(void *context, int begin, int end)
 {
-	int i = block->pair[c][0], j = block->pair[c][1];
-	float w_sum = w[i] + w[j];
-	if (w_sum == 0.0f) {
-		return;
-	}
-	vec3 d = v3_sub(x[j], x[i]);
-	float length = sqrtf(d.x * d.x + d.y * d.y + d.z * d.z);
-	length = length > 1e-12f ? length : 1e-12f;
-	float C = length - block->rest[c];
-	/* Branch-free choice of direction: the sign of C is unpredictable, and a negative
-	 * compliance means "no resistance this way". */
-	float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
-	float active = alpha >= 0.0f ? 1.0f : 0.0f;
-	float alpha_tilde = plait_maxf(alpha, 0.0f) * inverse_h_squared;
-	float denominator = (w_sum + alpha_tilde) * length;
-	float dlambda_over_length = active * (-C - alpha_tilde * block->lambda[c]) / denominator;
-	block->lambda[c] += dlambda_over_length * length;
-	vec3 n = v3_scale(d, dlambda_over_length);
-	x[i] = v3_mul_add(x[i], -w[i], n);
-	x[j] = v3_mul_add(x[j], w[j], n);
+	distance_job *job = context;
+	job->kernel(job->block, job->points, begin, end, job->inverse_h_squared);
 }
 
-#define LANES 8
-
-/* Projects one batch of at most LANES constraints that share no particle. Positions are
- * gathered once into lane arrays, the arithmetic runs over whole lanes (the compiler turns it
- * into SIMD), and the new positions are stored back without reading them again. Since the
- * constraints are independent, the result is exactly that of projecting them one after
- * another. Lanes past n carry zero inverse masses and change nothing; the block's arrays are
- * padded by LANES entries so their parameters can be read whole. */
-static void project_distance_batch(plait_distance_block *block, vec3 *x, const float *w, int first, int n,
-                                   float inverse_h_squared)
+/* Regions [first, last), each swept run after run on one thread. */
+static void distance_regions(void *context, int first, int last)
 {
-	float xi[LANES], yi[LANES], zi[LANES], xj[LANES], yj[LANES], zj[LANES], wi[LANES], wj[LANES];
-	const int(*pair)[2] = (const int(*)[2])block->pair + first;
-	for (int lane = 0; lane < LANES; ++lane) {
-		int i = pair[lane][0], j = pair[lane][1]; /* padding keeps lanes past n readable */
-		xi[lane] = x[i].x;
-		yi[lane] = x[i].y;
-		zi[lane] = x[i].z;
-		xj[lane] = x[j].x;
-		yj[lane] = x[j].y;
-		zj[lane] = x[j].z;
-		wi[lane] = lane < n ? w[i] : 0.0f;
-		wj[lane] = lane < n ? w[j] : 0.0f;
+	distance_job *job = context;
+	const plait_colouring *colouring = &job->block->colouring;
+	for (int r = first; r < last; ++r) {
+		int run_first = colouring->region_start[r], run_last = colouring->region_start[r + 1];
+		for (int k = run_first; k < run_last; ++k) {
+			int run = job->backward ? run_first + run_last - 1 - k : k;
+			distance_range(job, colouring->run_start[run], colouring->run_start[run + 1]);
+		}
 	}
-	const float *rest = block->rest + first, *tension = block->compliance_tension + first;
-	const float *compression = block->compliance_compression + first;
-	float *lambda = block->lambda + first;
-	float lambda_out[LANES];
-	for (int lane = 0; lane < LANES; ++lane) {
-		float dx = xj[lane] - xi[lane], dy = yj[lane] - yi[lane], dz = zj[lane] - zi[lane];
-		float w_sum = wi[lane] + wj[lane];
-		float length = sqrtf(dx * dx + dy * dy + dz * dz);
-		length = length > 1e-12f ? length : 1e-12f;
-		float C = length - rest[lane];
-		/* Branch-free: the sign of C is unpredictable, and a negative compliance means "no
-		 * resistance this way". */
-		float tension_alpha = tension[lane], compression_alpha = compression[lane], lambda_in = lambda[lane];
-		float alpha = C > 0.0f ? tension_alpha : compression_alpha;
-		float active = (float)((alpha >= 0.0f) & (w_sum > 0.0f));
-		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
-		float denominator = (w_sum + alpha_tilde) * length;
-		denominator = w_sum > 0.0f ? denominator : 1.0f;
-		float s = active * (-C - alpha_tilde * lambda_in) / denominator;
-		lambda_out[lane] = lambda_in + s * length;
-		float si = wi[lane] * s, sj = wj[lane] * s;
-		xi[lane] -= si * dx;
-		yi[lane] -= si * dy;
-		zi[lane] -= si * dz;
-		xj[lane] += sj * dx;
-		yj[lane] += sj * dy;
-		zj[lane] += sj * dz;
-	}
-	for (int lane = 0; lane < n; ++lane) {
-		int i = pair[lane][0], j = pair[lane][1];
-		lambda[lane] = lambda_out[lane];
-		x[i] = (vec3){xi[lane], yi[lane], zi[lane]};
-		x[j] = (vec3){xj[lane], yj[lane], zj[lane]};
+}
+
+/* One sweep, forward or backward: the regions side by side, then the boundary's runs one after
+ * another (each split over the workers), then what is not coloured yet one by one; backward
+ * goes the other way. */
+static void sweep_distance(plait_parallel *parallel, distance_job *job)
+{
+	plait_distance_block *block = job->block;
+	const plait_colouring *colouring = &block->colouring;
+	int coloured = plait_colouring_end(colouring);
+	int boundary_first = colouring->run_count > 0 ? colouring->region_start[colouring->region_count] : 0;
+	if (!job->backward) {
+		plait_parallel_for(parallel, distance_regions, job, 0, colouring->region_count, 1);
+		for (int k = boundary_first; k < colouring->run_count; ++k) {
+			plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
+			                   colouring->run_start[k + 1], DISTANCE_GRAIN);
+		}
+		for (int c = coloured; c < block->count; ++c) {
+			plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
+		}
+	} else {
+		for (int c = block->count - 1; c >= coloured; --c) {
+			plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
+		}
+		for (int k = colouring->run_count - 1; k >= boundary_first; --k) {
+			plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
+			                   colouring->run_start[k + 1], DISTANCE_GRAIN);
+		}
+		plait_parallel_for(parallel, distance_regions, job, 0, colouring->region_count, 1);
 	}
 }
 
 void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
-                          plait_sweep sweep)
+                          plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel)
 {
-	vec3 *x = particles->x;
-	const float *w = particles->w;
-	int count = block->count;
-	int batches = block->batch_count;
-	int batched = batches > 0 ? block->batch_start[batches] : 0;
+	distance_job job = {kernel, block, particles->point, inverse_h_squared, false};
 	if (sweep != PLAIT_SWEEP_BACKWARD) {
-		for (int b = 0; b < batches; ++b) {
-			int first = block->batch_start[b];
-			project_distance_batch(block, x, w, first, block->batch_start[b + 1] - first, inverse_h_squared);
-		}
-		for (int c = batched; c < count; ++c) {
-			project_distance(block, x, w, c, inverse_h_squared);
-		}
+		sweep_distance(parallel, &job);
 	}
 	if (sweep != PLAIT_SWEEP_FORWARD) {
-		for (int c = count - 1; c >= batched; --c) {
-			project_distance(block, x, w, c, inverse_h_squared);
-		}
-		for (int b = batches - 1; b >= 0; --b) {
-			int first = block->batch_start[b];
-			project_distance_batch(block, x, w, first, block->batch_start[b + 1] - first, inverse_h_squared);
-		}
+		job.backward = true;
+		sweep_distance(parallel, &job);
 	}
 }
 
@@ -151,7 +119,7 @@ bool plait_dihedral_angle(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float *angle, vec3
  * lane-array form as the distance batches (SIMD, results equal to sequential projection). The
  * math is plait_dihedral_angle's, written branch-free: a degenerate hinge (a zero-area
  * triangle or zero-length edge) gets a zero correction. */
-static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w, int first, int n,
+static void project_bend_batch(plait_bend_block *block, plait_point *points, int first, int n,
                                float inverse_h_squared)
 {
 	float px[4][LANES], py[4][LANES], pz[4][LANES], wq[4][LANES];
@@ -160,11 +128,11 @@ static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w,
 	for (int lane = 0; lane < LANES; ++lane) {
 		int c = first + (lane < n ? lane : 0);
 		for (int k = 0; k < 4; ++k) {
-			int i = block->quad[c][k];
-			px[k][lane] = x[i].x;
-			py[k][lane] = x[i].y;
-			pz[k][lane] = x[i].z;
-			wq[k][lane] = lane < n ? w[i] : 0.0f;
+			const plait_point *point = &points[block->quad[c][k]];
+			px[k][lane] = point->x.x;
+			py[k][lane] = point->x.y;
+			pz[k][lane] = point->x.z;
+			wq[k][lane] = lane < n ? point->w : 0.0f;
 		}
 		rest[lane] = block->rest_angle[c];
 		compliance[lane] = block->compliance[c];
@@ -234,21 +202,21 @@ static void project_bend_batch(plait_bend_block *block, vec3 *x, const float *w,
 		int c = first + lane;
 		block->lambda[c] = lambda[lane];
 		for (int k = 0; k < 4; ++k) {
-			x[block->quad[c][k]] = (vec3){px[k][lane], py[k][lane], pz[k][lane]};
+			points[block->quad[c][k]].x = (vec3){px[k][lane], py[k][lane], pz[k][lane]};
 		}
 	}
 }
 
-static void project_bend(plait_bend_block *block, vec3 *x, const float *w, int c, float inverse_h_squared)
+static void project_bend(plait_bend_block *block, plait_point *points, int c, float inverse_h_squared)
 {
 	const int *q = block->quad[c];
-	float wq[4] = {w[q[0]], w[q[1]], w[q[2]], w[q[3]]};
+	float wq[4] = {points[q[0]].w, points[q[1]].w, points[q[2]].w, points[q[3]].w};
 	if (wq[0] + wq[1] + wq[2] + wq[3] == 0.0f) {
 		return;
 	}
 	float angle;
 	vec3 g[4];
-	if (!plait_dihedral_angle(x[q[0]], x[q[1]], x[q[2]], x[q[3]], &angle, g)) {
+	if (!plait_dihedral_angle(points[q[0]].x, points[q[1]].x, points[q[2]].x, points[q[3]].x, &angle, g)) {
 		return;
 	}
 	float C = angle - block->rest_angle[c];
@@ -267,36 +235,63 @@ static void project_bend(plait_bend_block *block, vec3 *x, const float *w, int c
 	float dlambda = (-C - alpha_tilde * block->lambda[c]) / denominator;
 	block->lambda[c] += dlambda;
 	for (int k = 0; k < 4; ++k) {
-		x[q[k]] = v3_mul_add(x[q[k]], wq[k] * dlambda, g[k]);
+		points[q[k]].x = v3_mul_add(points[q[k]].x, wq[k] * dlambda, g[k]);
 	}
 }
 
-void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared)
+typedef struct bend_job {
+	plait_bend_block *block;
+	plait_point *points;
+	float inverse_h_squared;
+} bend_job;
+
+static void bend_range(void *context, int begin, int end)
 {
-	vec3 *x = particles->x;
-	const float *w = particles->w;
-	int batches = block->batch_count;
-	for (int b = 0; b < batches; ++b) {
-		int first = block->batch_start[b];
-		project_bend_batch(block, x, w, first, block->batch_start[b + 1] - first, inverse_h_squared);
+	bend_job *job = context;
+	for (int first = begin; first < end; first += LANES) {
+		int n = end - first < LANES ? end - first : LANES;
+		project_bend_batch(job->block, job->points, first, n, job->inverse_h_squared);
 	}
-	for (int c = batches > 0 ? block->batch_start[batches] : 0; c < block->count; ++c) {
-		project_bend(block, x, w, c, inverse_h_squared);
+}
+
+static void bend_regions(void *context, int first, int last)
+{
+	bend_job *job = context;
+	const plait_colouring *colouring = &job->block->colouring;
+	for (int k = colouring->region_start[first]; k < colouring->region_start[last]; ++k) {
+		bend_range(job, colouring->run_start[k], colouring->run_start[k + 1]);
+	}
+}
+
+/* Forward only, in the order of sweep_distance. */
+void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
+                      plait_parallel *parallel)
+{
+	bend_job job = {block, particles->point, inverse_h_squared};
+	const plait_colouring *colouring = &block->colouring;
+	plait_parallel_for(parallel, bend_regions, &job, 0, colouring->region_count, 1);
+	int boundary_first = colouring->run_count > 0 ? colouring->region_start[colouring->region_count] : 0;
+	for (int k = boundary_first; k < colouring->run_count; ++k) {
+		plait_parallel_for(parallel, bend_range, &job, colouring->run_start[k], colouring->run_start[k + 1],
+		                   BEND_GRAIN);
+	}
+	for (int c = plait_colouring_end(colouring); c < block->count; ++c) {
+		project_bend(block, particles->point, c, inverse_h_squared);
 	}
 }
 
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared)
 {
-	vec3 *x = particles->x;
-	const float *w = particles->w;
+	plait_point *points = particles->point;
 	for (int c = 0; c < block->count; ++c) {
-		int i0 = block->triple[c][0], i1 = block->triple[c][1], i2 = block->triple[c][2];
-		float w0 = w[i0], w1 = w[i1], w2 = w[i2];
+		plait_point *p0 = &points[block->triple[c][0]], *p1 = &points[block->triple[c][1]];
+		plait_point *p2 = &points[block->triple[c][2]];
+		float w0 = p0->w, w1 = p1->w, w2 = p2->w;
 		float denominator = 0.25f * w0 + w1 + 0.25f * w2;
 		if (denominator == 0.0f) {
 			continue;
 		}
-		vec3 offset = v3_sub(x[i1], v3_scale(v3_add(x[i0], x[i2]), 0.5f));
+		vec3 offset = v3_sub(p1->x, v3_scale(v3_add(p0->x, p2->x), 0.5f));
 		float length = v3_length(offset);
 		if (length < 1e-12f) {
 			continue;
@@ -306,31 +301,30 @@ void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particle
 		float dlambda = (-C - alpha_tilde * block->lambda[c]) / (denominator + alpha_tilde);
 		block->lambda[c] += dlambda;
 		vec3 n = v3_scale(offset, dlambda / length);
-		x[i0] = v3_mul_add(x[i0], -0.5f * w0, n);
-		x[i1] = v3_mul_add(x[i1], w1, n);
-		x[i2] = v3_mul_add(x[i2], -0.5f * w2, n);
+		p0->x = v3_mul_add(p0->x, -0.5f * w0, n);
+		p1->x = v3_mul_add(p1->x, w1, n);
+		p2->x = v3_mul_add(p2->x, -0.5f * w2, n);
 	}
 }
 
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles)
 {
-	vec3 *x = particles->x;
-	const float *w = particles->w;
+	plait_point *points = particles->point;
 	for (int c = 0; c < block->count; ++c) {
-		int i = block->pair[c][0], anchor = block->pair[c][1];
-		float w_sum = w[i] + w[anchor];
+		plait_point *p = &points[block->pair[c][0]], *anchor = &points[block->pair[c][1]];
+		float w_sum = p->w + anchor->w;
 		if (w_sum == 0.0f) {
 			continue;
 		}
-		vec3 d = v3_sub(x[i], x[anchor]);
+		vec3 d = v3_sub(p->x, anchor->x);
 		float length = sqrtf(v3_length_sq(d));
 		float excess = length - block->length[c];
 		if (excess <= 0.0f) {
 			continue;
 		}
 		vec3 correction = v3_scale(d, block->stiffness[c] * excess / (length * w_sum));
-		x[i] = v3_mul_add(x[i], -w[i], correction);
-		x[anchor] = v3_mul_add(x[anchor], w[anchor], correction);
+		p->x = v3_mul_add(p->x, -p->w, correction);
+		anchor->x = v3_mul_add(anchor->x, anchor->w, correction);
 	}
 }
 
@@ -342,7 +336,8 @@ float plait_distance_max_strain(const plait_distance_block *block, const plait_p
 		if (rest <= 0.0f) {
 			continue;
 		}
-		float length = v3_length(v3_sub(particles->x[block->pair[c][1]], particles->x[block->pair[c][0]]));
+		float length =
+		    v3_length(v3_sub(particles->point[block->pair[c][1]].x, particles->point[block->pair[c][0]].x));
 		float strain = fabsf(length / rest - 1.0f);
 		worst = strain > worst ? strain : worst;
 	}

@@ -8,6 +8,8 @@
 #ifndef PLAIT_DYNAMICS_CONSTRAINTS_H
 #define PLAIT_DYNAMICS_CONSTRAINTS_H
 
+#include "core/parallel.h"
+#include "dynamics/distance_kernel.h"
 #include "dynamics/sim.h"
 
 /* Direction of a Gauss-Seidel sweep. A forward sweep alone is not symmetric: its error
@@ -31,9 +33,12 @@ static inline plait_sweep plait_sweep_for(int iteration, int count)
 	return iteration == count - 1 ? PLAIT_SWEEP_SYMMETRIC : PLAIT_SWEEP_FORWARD;
 }
 
+/* A sweep goes colour by colour (each colour split over the workers), then through the
+ * uncoloured rest one by one; a backward sweep goes the other way. */
 void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
-                          plait_sweep sweep);
-void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared);
+                          plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel);
+void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
+                      plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. */
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles);
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);

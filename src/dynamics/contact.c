@@ -282,11 +282,11 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		world_upper = v3_add(world_upper, v3(grow, grow, grow));
 	}
 	for (int i = 0; i < p->count; ++i) {
-		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->w[i] == 0.0f) {
+		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->point[i].w == 0.0f) {
 			continue;
 		}
 		if (bounded) {
-			vec3 a = p->x_prev[i], b = p->x[i];
+			vec3 a = p->x_prev[i], b = p->point[i].x;
 			if (plait_maxf(a.x, b.x) < world_lower.x || plait_minf(a.x, b.x) > world_upper.x ||
 			    plait_maxf(a.y, b.y) < world_lower.y || plait_minf(a.y, b.y) > world_upper.y ||
 			    plait_maxf(a.z, b.z) < world_lower.z || plait_minf(a.z, b.z) > world_upper.z) {
@@ -297,7 +297,7 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		/* Everything in the collider's own space: there the collider stands still and the
 		 * particle moves along a straight line from p0 to p1. */
 		vec3 p0 = plait_rigid_apply_inverse(r0, p->x_prev[i]);
-		vec3 p1 = plait_rigid_apply_inverse(r1, p->x[i]);
+		vec3 p1 = plait_rigid_apply_inverse(r1, p->point[i].x);
 		float radius = (p->radius[i] + c->thickness) * inverse_scale;
 		if (c->shape.type == PLAIT_SHAPE_MESH) {
 			vec3 normal;
@@ -305,7 +305,7 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, &normal)) {
 				vec3 surface_velocity =
 				    v3_scale(v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, p1)), inverse_h);
-				p->x[i] = plait_rigid_apply(r1, p1);
+				p->point[i].x = plait_rigid_apply(r1, p1);
 				record_collider_contact(p, i, plait_rigid_rotate(r1, normal), surface_velocity,
 				                        0.5f * (mat->bounce + c->bounce),
 				                        0.5f * (mat->stickiness + c->stickiness));
@@ -341,7 +341,7 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		}
 		float friction = combined_friction(mat->friction, c->friction);
 		vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
-		p->x[i] = plait_rigid_apply(r1, v3_add(p1, correction));
+		p->point[i].x = plait_rigid_apply(r1, v3_add(p1, correction));
 		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
 		if (c->shape.type == PLAIT_SHAPE_PLANE) {
 			p->flags[i] |= PLAIT_PARTICLE_ON_PLANE;
@@ -380,13 +380,13 @@ static bool sweep_pair(vec3 d0, vec3 d1, float distance, float *toi)
 static int collide_pair(plait_sim *sim, int i, int j)
 {
 	plait_particles *p = &sim->particles;
-	float w_sum = p->w[i] + p->w[j];
+	float w_sum = p->point[i].w + p->point[j].w;
 	if (w_sum == 0.0f) {
 		return 0;
 	}
 	float distance = p->radius[i] + p->radius[j];
 	vec3 d0 = v3_sub(p->x_prev[j], p->x_prev[i]);
-	vec3 d1 = v3_sub(p->x[j], p->x[i]);
+	vec3 d1 = v3_sub(p->point[j].x, p->point[i].x);
 	float toi;
 	if (!sweep_pair(d0, d1, distance, &toi)) {
 		return 0;
@@ -402,11 +402,11 @@ static int collide_pair(plait_sim *sim, int i, int j)
 	}
 	const plait_material *mi = &sim->materials[p->material[i]];
 	const plait_material *mj = &sim->materials[p->material[j]];
-	float wi = p->w[i] / w_sum, wj = p->w[j] / w_sum;
+	float wi = p->point[i].w / w_sum, wj = p->point[j].w / w_sum;
 	vec3 correction =
 	    contact_correction(normal, depth, v3_sub(d1, d0), combined_friction(mi->friction, mj->friction));
-	p->x[i] = v3_mul_add(p->x[i], -wi, correction);
-	p->x[j] = v3_mul_add(p->x[j], wj, correction);
+	p->point[i].x = v3_mul_add(p->point[i].x, -wi, correction);
+	p->point[j].x = v3_mul_add(p->point[j].x, wj, correction);
 
 	if (sim->pair_contact_count < sim->pair_contact_capacity) {
 		plait_particle_contact *contact = &sim->pair_contacts[sim->pair_contact_count++];
@@ -450,9 +450,9 @@ static int collide_particle_pairs(plait_sim *sim)
 	double sum_x = 0.0, sum_y = 0.0, sum_z = 0.0;
 	for (int i = 0; i < p->count; ++i) {
 		if (p->flags[i] & PLAIT_PARTICLE_COLLIDE) {
-			sum_x += (double)(p->x[i].x - p->x_prev[i].x);
-			sum_y += (double)(p->x[i].y - p->x_prev[i].y);
-			sum_z += (double)(p->x[i].z - p->x_prev[i].z);
+			sum_x += (double)(p->point[i].x.x - p->x_prev[i].x);
+			sum_y += (double)(p->point[i].x.y - p->x_prev[i].y);
+			sum_z += (double)(p->point[i].x.z - p->x_prev[i].z);
 			++count;
 		}
 	}
@@ -468,7 +468,7 @@ static int collide_particle_pairs(plait_sim *sim)
 		}
 		float r = p->radius[i];
 		vec3 thickness = {r, r, r};
-		vec3 end = v3_sub(p->x[i], drift);
+		vec3 end = v3_sub(p->point[i].x, drift);
 		sim->pair_list[count] = i;
 		sim->pair_lower[count] = v3_sub(v3_min(p->x_prev[i], end), thickness);
 		sim->pair_upper[count] = v3_add(v3_max(p->x_prev[i], end), thickness);
@@ -552,7 +552,7 @@ void plait_contacts_end_substep(plait_sim *sim)
 	 * substeps, so resting particles do not jitter. */
 	float resting_speed = 2.0f * v3_length(sim->settings.gravity) * sim->substep_time + 1e-6f;
 	for (int i = 0; i < p->count; ++i) {
-		if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) || p->w[i] == 0.0f) {
+		if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) || p->point[i].w == 0.0f) {
 			continue;
 		}
 		vec3 n = p->contact_normal[i];
@@ -573,7 +573,7 @@ void plait_contacts_end_substep(plait_sim *sim)
 	for (int c = 0; c < sim->pair_contact_count; ++c) {
 		const plait_particle_contact *contact = &sim->pair_contacts[c];
 		int i = contact->i, j = contact->j;
-		float w_sum = p->w[i] + p->w[j];
+		float w_sum = p->point[i].w + p->point[j].w;
 		if (w_sum == 0.0f || contact->bounce <= 0.0f || contact->approach_speed >= -resting_speed) {
 			continue;
 		}
@@ -584,8 +584,8 @@ void plait_contacts_end_substep(plait_sim *sim)
 		}
 		/* Equal and opposite impulses: momentum is conserved. */
 		vec3 impulse = v3_scale(contact->normal, (target - normal_speed) / w_sum);
-		p->v[i] = v3_mul_add(p->v[i], -p->w[i], impulse);
-		p->v[j] = v3_mul_add(p->v[j], p->w[j], impulse);
+		p->v[i] = v3_mul_add(p->v[i], -p->point[i].w, impulse);
+		p->v[j] = v3_mul_add(p->v[j], p->point[j].w, impulse);
 	}
 }
 
@@ -605,7 +605,8 @@ int plait_count_penetrations(const plait_sim *sim)
 			}
 			vec3 normal;
 			float distance =
-			    plait_shape_distance(&c->shape, plait_rigid_apply_inverse(&r, p->x[i]), &normal) * r.scale;
+			    plait_shape_distance(&c->shape, plait_rigid_apply_inverse(&r, p->point[i].x), &normal) *
+			    r.scale;
 			if (distance < -(1e-4f + 0.01f * p->radius[i])) {
 				++count;
 			}

@@ -9,6 +9,7 @@
 
 #include "collision/shape.h"
 #include "core/alloc.h"
+#include "core/parallel.h"
 #include "dynamics/schedule.h"
 
 enum {
@@ -35,27 +36,46 @@ typedef struct plait_material {
 	bool self_collide; /* loose particles of this object collide with each other */
 } plait_material;
 
+/* A particle's position and inverse mass in one 16-byte record, so that a constraint kernel
+ * fetches everything it needs about a vertex with one vector load (and stores it with one). */
+typedef struct plait_point {
+	vec3 x;  /* position, scene units */
+	float w; /* inverse mass, 1/kg; 0 = pinned or kinematic */
+} plait_point;
+
 /* Structure of arrays: one entry per particle of every object. */
 typedef struct plait_particles {
 	int count, capacity;
-	vec3 *x;       /* position, scene units */
-	vec3 *x_prev;  /* position at the start of the current substep */
-	vec3 *v;       /* velocity, scene units per second */
-	vec3 *v_pre;   /* velocity after external forces, before constraints (restitution) */
-	float *w;      /* inverse mass, 1/kg; 0 = pinned */
-	float *mass;   /* kg, kept while pinned */
-	float *radius; /* collision radius, scene units */
+	plait_point *point; /* position and inverse mass; 16-byte aligned */
+	vec3 *x_prev;       /* position at the start of the current substep */
+	vec3 *v;            /* velocity, scene units per second */
+	vec3 *v_pre;        /* velocity after external forces, before constraints (restitution) */
+	float *mass;        /* kg, kept while pinned */
+	float *radius;      /* collision radius, scene units */
 	int *material;
 	uint8_t *flags;
 	vec3 *pin_start, *pin_end; /* pin targets at frame start and end */
 	vec3 *contact_normal;      /* world normal of the last contact in this substep */
 	vec3 *contact_velocity;    /* velocity of the touched surface */
 	float *contact_bounce, *contact_stickiness;
-	float *drag_matrix;      /* 6 per particle: symmetric implicit air drag (kg/s) */
-	vec3 *air_force;         /* explicit air force toward the wind (N in scene units) */
-	vec3 *lift_force;        /* lift (N in scene units), limited when integrated */
-	vec3 *x_frame, *v_frame; /* state at the start of the frame, restored if it fails */
+	float *drag_matrix;       /* 6 per particle: symmetric implicit air drag (kg/s) */
+	vec3 *air_force;          /* explicit air force toward the wind (N in scene units) */
+	vec3 *lift_force;         /* lift (N in scene units), limited when integrated */
+	plait_point *point_frame; /* state at the start of the frame, restored if it fails */
+	vec3 *v_frame;
 } plait_particles;
+
+/* The sweep order of a constraint block (dynamics/colouring.h). Constraints are stored region
+ * by region, then the boundary's. Each is a list of runs of constraints that share no particle;
+ * run k is [run_start[k], run_start[k + 1]). Region r owns runs [region_start[r],
+ * region_start[r + 1]); the boundary owns runs [region_start[region_count], run_count).
+ * Constraints from run_start[run_count] to the block's end (added since the block was last
+ * coloured) are projected one by one, in order. */
+typedef struct plait_colouring {
+	int region_count, run_count;
+	int *region_start; /* region_count + 1 entries */
+	int *run_start;    /* run_count + 1 entries */
+} plait_colouring;
 
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
  * direction: when longer than rest, compliance_tension; when shorter, compliance_compression;
@@ -68,10 +88,7 @@ typedef struct plait_distance_block {
 	float *compliance_tension;
 	float *compliance_compression;
 	float *lambda;
-	/* Batches of constraints that share no particle cover [0, batch_start[batch_count]); any
-	 * constraints after that are projected one by one. */
-	int batch_count, batch_capacity;
-	int *batch_start;
+	plait_colouring colouring;
 } plait_distance_block;
 
 /* Signed dihedral angle across an edge (p0, p1) between wings p2 and p3 (cloth bend). */
@@ -81,8 +98,7 @@ typedef struct plait_bend_block {
 	float *rest_angle;
 	float *compliance;
 	float *lambda;
-	int batch_count, batch_capacity; /* as for distance blocks */
-	int *batch_start;
+	plait_colouring colouring;
 } plait_bend_block;
 
 /* Curve bend: distance of p1 from the midpoint of p0 and p2 (zero for a straight rest). */
@@ -164,6 +180,7 @@ typedef struct plait_sim {
 	int material_count, material_capacity;
 	plait_material *materials;
 	plait_distance_block stretch, shear;
+	plait_distance_block bend_distance; /* bend as distances across vertices (PLAIT_BEND_DISTANCE) */
 	plait_bend_block bend;
 	plait_rod_bend_block rod_bend;
 	plait_tether_block tether;
@@ -179,6 +196,7 @@ typedef struct plait_sim {
 	int schedule_kinds[PLAIT_KIND_COUNT]; /* schedule kind index -> plait_kind */
 	plait_schedule schedule;
 	bool schedule_dirty;
+	bool colouring_dirty; /* constraints were added or removed since they were last coloured */
 
 	/* Scratch of the particle-pair stage (spatial hash and contacts). */
 	bool particle_pairs_active;
@@ -188,6 +206,12 @@ typedef struct plait_sim {
 	int *pair_list;                /* particles taking part in particle-pair collisions */
 	vec3 *pair_lower, *pair_upper; /* their swept, thickened boxes */
 	int pair_list_capacity;
+
+	/* How the hot loops run: the kernel of the chosen instruction set and the workers. */
+	plait_simd simd;
+	void (*distance_kernel)(struct plait_distance_block *block, plait_point *points, int begin, int end,
+	                        float inverse_h_squared);
+	plait_parallel parallel;
 
 	int frame;
 	double time;        /* seconds simulated */

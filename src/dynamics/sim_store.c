@@ -1,6 +1,6 @@
 #include "dynamics/sim_store.h"
 
-#include "dynamics/batching.h"
+#include "dynamics/colouring.h"
 
 #include <string.h>
 
@@ -38,11 +38,10 @@ void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
 static void free_particles(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
-	void *fields[] = {p->x,
+	void *fields[] = {p->point,
 	                  p->x_prev,
 	                  p->v,
 	                  p->v_pre,
-	                  p->w,
 	                  p->mass,
 	                  p->radius,
 	                  p->material,
@@ -56,7 +55,7 @@ static void free_particles(plait_sim *sim)
 	                  p->drag_matrix,
 	                  p->air_force,
 	                  p->lift_force,
-	                  p->x_frame,
+	                  p->point_frame,
 	                  p->v_frame};
 	for (size_t k = 0; k < sizeof fields / sizeof fields[0]; ++k) {
 		plait_free(&sim->allocator, fields[k]);
@@ -70,7 +69,7 @@ static void free_distance(plait_sim *sim, plait_distance_block *b)
 	FREE_FIELD(*b, compliance_tension);
 	FREE_FIELD(*b, compliance_compression);
 	FREE_FIELD(*b, lambda);
-	FREE_FIELD(*b, batch_start);
+	plait_colouring_clear(&b->colouring, &sim->allocator);
 }
 
 void plait_sim_destroy(plait_sim *sim)
@@ -78,11 +77,12 @@ void plait_sim_destroy(plait_sim *sim)
 	free_particles(sim);
 	free_distance(sim, &sim->stretch);
 	free_distance(sim, &sim->shear);
+	free_distance(sim, &sim->bend_distance);
 	FREE_FIELD(sim->bend, quad);
 	FREE_FIELD(sim->bend, rest_angle);
 	FREE_FIELD(sim->bend, compliance);
 	FREE_FIELD(sim->bend, lambda);
-	FREE_FIELD(sim->bend, batch_start);
+	plait_colouring_clear(&sim->bend.colouring, &sim->allocator);
 	FREE_FIELD(sim->rod_bend, triple);
 	FREE_FIELD(sim->rod_bend, rest);
 	FREE_FIELD(sim->rod_bend, compliance);
@@ -114,11 +114,10 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 	int capacity = next_capacity(p->capacity, needed);
 	const plait_allocator *a = &sim->allocator;
 	int n = p->count;
-	bool ok = grow_array(a, (void **)&p->x, sizeof(vec3), n, capacity) &&
+	bool ok = grow_array(a, (void **)&p->point, sizeof(plait_point), n, capacity) &&
 	          grow_array(a, (void **)&p->x_prev, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->v, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->v_pre, sizeof(vec3), n, capacity) &&
-	          grow_array(a, (void **)&p->w, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->mass, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->radius, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->material, sizeof(int), n, capacity) &&
@@ -132,7 +131,7 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 	          grow_array(a, (void **)&p->drag_matrix, 6 * sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->air_force, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->lift_force, sizeof(vec3), n, capacity) &&
-	          grow_array(a, (void **)&p->x_frame, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->point_frame, sizeof(plait_point), n, capacity) &&
 	          grow_array(a, (void **)&p->v_frame, sizeof(vec3), n, capacity);
 	if (ok) {
 		p->capacity = capacity;
@@ -142,8 +141,7 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 
 bool plait_sim_reserve_distance(plait_sim *sim, plait_distance_block *b, int count)
 {
-	/* Batches read whole lanes: keep 8 entries of padding past the last constraint. */
-	int needed = b->count + count + 8;
+	int needed = b->count + count;
 	if (needed <= b->capacity) {
 		return true;
 	}
@@ -269,12 +267,12 @@ int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float m
 {
 	plait_particles *p = &sim->particles;
 	int i = p->count++;
-	p->x[i] = position;
+	p->point[i].x = position;
 	p->x_prev[i] = position;
 	p->v[i] = velocity;
 	p->v_pre[i] = velocity;
 	p->mass[i] = mass;
-	p->w[i] = (flags & PLAIT_PARTICLE_PINNED) ? 0.0f : 1.0f / mass;
+	p->point[i].w = (flags & PLAIT_PARTICLE_PINNED) ? 0.0f : 1.0f / mass;
 	p->radius[i] = radius;
 	p->material[i] = material;
 	p->flags[i] = flags;
@@ -295,7 +293,7 @@ void plait_sim_add_distance(plait_distance_block *b, int i, int j, float rest, f
 	b->lambda[c] = 0.0f;
 }
 
-static void compact_distance(plait_distance_block *b, const int *remap)
+static void compact_distance(plait_distance_block *b, const int *remap, const plait_allocator *allocator)
 {
 	int kept = 0;
 	for (int c = 0; c < b->count; ++c) {
@@ -312,6 +310,7 @@ static void compact_distance(plait_distance_block *b, const int *remap)
 		++kept;
 	}
 	b->count = kept;
+	plait_colouring_clear(&b->colouring, allocator);
 }
 
 bool plait_sim_compact(plait_sim *sim, const bool *keep)
@@ -328,11 +327,10 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 			continue;
 		}
 		remap[i] = kept;
-		p->x[kept] = p->x[i];
+		p->point[kept] = p->point[i];
 		p->x_prev[kept] = p->x_prev[i];
 		p->v[kept] = p->v[i];
 		p->v_pre[kept] = p->v_pre[i];
-		p->w[kept] = p->w[i];
 		p->mass[kept] = p->mass[i];
 		p->radius[kept] = p->radius[i];
 		p->material[kept] = p->material[i];
@@ -342,14 +340,12 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		++kept;
 	}
 	p->count = kept;
-	compact_distance(&sim->stretch, remap);
-	compact_distance(&sim->shear, remap);
-	/* Removing constraints breaks batches: batch the blocks again from the start. Should that
-	 * run out of memory, the constraints are still projected, one by one. */
-	sim->stretch.batch_count = 0;
-	sim->shear.batch_count = 0;
-	plait_sim_batch_distance(sim, &sim->stretch, 0);
-	plait_sim_batch_distance(sim, &sim->shear, 0);
+	compact_distance(&sim->stretch, remap, &sim->allocator);
+	compact_distance(&sim->shear, remap, &sim->allocator);
+	compact_distance(&sim->bend_distance, remap, &sim->allocator);
+	/* Removing constraints breaks the colours: until the next step colours the blocks again,
+	 * every constraint is projected one by one (an empty colouring). */
+	sim->colouring_dirty = true;
 
 	plait_bend_block *bend = &sim->bend;
 	int bend_kept = 0;
@@ -369,8 +365,7 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		++bend_kept;
 	}
 	bend->count = bend_kept;
-	bend->batch_count = 0;
-	plait_sim_batch_bend(sim, 0);
+	plait_colouring_clear(&bend->colouring, &sim->allocator);
 
 	plait_rod_bend_block *rod = &sim->rod_bend;
 	int rod_kept = 0;
@@ -416,107 +411,4 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 	aero->count = aero_kept;
 	plait_free(&sim->allocator, remap);
 	return true;
-}
-
-#define BATCH_WIDTH 8
-#define BATCH_WINDOW 64
-
-/* Applies order (indices relative to first) to count elements of size bytes at data + first. */
-/* Applies order to count elements of `size` bytes at data + first, through scratch (room for
- * count elements of the largest size): it cannot fail, so a block is never half-permuted. */
-static void permute(char *scratch, void *data, size_t size, int first, int count, const int *order)
-{
-	char *base = (char *)data + size * (size_t)first;
-	for (int k = 0; k < count; ++k) {
-		memcpy(scratch + size * (size_t)k, base + size * (size_t)order[k], size);
-	}
-	memcpy(base, scratch, size * (size_t)count);
-}
-
-/* Makes room for `batches` more entries in a block's batch list. */
-static bool reserve_batches(const plait_allocator *a, int **batch_start, int batch_count, int *batch_capacity,
-                            int batches)
-{
-	int needed = batch_count + batches + 1;
-	if (needed <= *batch_capacity) {
-		return true;
-	}
-	int capacity = needed + needed / 2;
-	if (!grow_array(a, (void **)batch_start, sizeof(int), batch_count + 1, capacity)) {
-		return false;
-	}
-	*batch_capacity = capacity;
-	return true;
-}
-
-/* Appends batches of the given sizes, starting at first, to a block's batch list (reserved). */
-static void record_batches(int *batch_start, int *batch_count, int first, const int *sizes, int batches)
-{
-	int start = first;
-	batch_start[*batch_count] = start;
-	for (int k = 0; k < batches; ++k) {
-		start += sizes[k];
-		batch_start[++*batch_count] = start;
-	}
-}
-
-bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *b, int first)
-{
-	int batched = b->batch_count > 0 ? b->batch_start[b->batch_count] : 0;
-	int count = b->count - first;
-	if (batched != first || count <= 0) {
-		return batched == first; /* batches must stay contiguous from 0 */
-	}
-	const plait_allocator *a = &sim->allocator;
-	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
-	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	char *scratch = plait_alloc(a, sizeof *b->pair * (size_t)count);
-	int batches =
-	    order != NULL && sizes != NULL && scratch != NULL
-	        ? plait_batch_order(a, &b->pair[first][0], 2, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
-	        : -1;
-	/* Room for the batch list first: after that nothing can fail half-way. */
-	bool ok =
-	    batches >= 0 && reserve_batches(a, &b->batch_start, b->batch_count, &b->batch_capacity, batches);
-	if (ok) {
-		permute(scratch, b->pair, sizeof *b->pair, first, count, order);
-		permute(scratch, b->rest, sizeof(float), first, count, order);
-		permute(scratch, b->compliance_tension, sizeof(float), first, count, order);
-		permute(scratch, b->compliance_compression, sizeof(float), first, count, order);
-		record_batches(b->batch_start, &b->batch_count, first, sizes, batches);
-	}
-	plait_free(a, order);
-	plait_free(a, sizes);
-	plait_free(a, scratch);
-	return ok;
-}
-
-bool plait_sim_batch_bend(plait_sim *sim, int first)
-{
-	plait_bend_block *b = &sim->bend;
-	int batched = b->batch_count > 0 ? b->batch_start[b->batch_count] : 0;
-	int count = b->count - first;
-	if (batched != first || count <= 0) {
-		return batched == first;
-	}
-	const plait_allocator *a = &sim->allocator;
-	int *order = plait_alloc(a, sizeof(int) * (size_t)count);
-	int *sizes = plait_alloc(a, sizeof(int) * (size_t)count);
-	char *scratch = plait_alloc(a, sizeof *b->quad * (size_t)count);
-	int batches =
-	    order != NULL && sizes != NULL && scratch != NULL
-	        ? plait_batch_order(a, &b->quad[first][0], 4, count, BATCH_WIDTH, BATCH_WINDOW, order, sizes)
-	        : -1;
-	bool ok =
-	    batches >= 0 && reserve_batches(a, &b->batch_start, b->batch_count, &b->batch_capacity, batches);
-	if (ok) {
-		permute(scratch, b->quad, sizeof *b->quad, first, count, order);
-		permute(scratch, b->rest_angle, sizeof(float), first, count, order);
-		permute(scratch, b->compliance, sizeof(float), first, count, order);
-		record_batches(b->batch_start, &b->batch_count, first, sizes, batches);
-	}
-	plait_free(a, order);
-	plait_free(a, sizes);
-	plait_free(a, scratch);
-	return ok;
 }

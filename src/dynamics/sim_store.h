@@ -28,8 +28,4 @@ void plait_sim_add_distance(plait_distance_block *block, int i, int j, float res
  * renumbers the rest; materials and colliders of the object are removed by the caller. */
 bool plait_sim_compact(plait_sim *sim, const bool *keep);
 
-/* Reorders constraints [first, block count) of each block into independent batches
- * (dynamics/batching.h). Called after an object's constraints are appended. */
-bool plait_sim_batch_distance(plait_sim *sim, plait_distance_block *block, int first);
-bool plait_sim_batch_bend(plait_sim *sim, int first);
 #endif

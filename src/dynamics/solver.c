@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "dynamics/air.h"
+#include "dynamics/colouring.h"
 #include "dynamics/constraints.h"
 #include "dynamics/contact.h"
 
@@ -51,6 +52,7 @@ static void reset_multipliers(plait_sim *sim)
 {
 	clear_floats(sim->stretch.lambda, sim->stretch.count);
 	clear_floats(sim->shear.lambda, sim->shear.count);
+	clear_floats(sim->bend_distance.lambda, sim->bend_distance.count);
 	clear_floats(sim->bend.lambda, sim->bend.count);
 	clear_floats(sim->rod_bend.lambda, sim->rod_bend.count);
 }
@@ -64,12 +66,12 @@ static void predict_positions(plait_sim *sim, float h, float t_end)
 	plait_particles *p = &sim->particles;
 	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
 	for (int i = 0; i < p->count; ++i) {
-		p->x_prev[i] = p->x[i];
+		p->x_prev[i] = p->point[i].x;
 		p->v_pre[i] = p->v[i];
-		if (p->w[i] == 0.0f) {
-			p->x[i] = v3_lerp(p->pin_start[i], p->pin_end[i], t_end);
+		if (p->point[i].w == 0.0f) {
+			p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], t_end);
 		} else {
-			p->x[i] = v3_mul_add(p->x[i], h, v3_sub(p->v[i], half_gravity_step));
+			p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(p->v[i], half_gravity_step));
 		}
 	}
 }
@@ -82,8 +84,8 @@ static void update_velocities(plait_sim *sim, float h)
 	float inverse_h = 1.0f / h;
 	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
 	for (int i = 0; i < p->count; ++i) {
-		vec3 mean = v3_scale(v3_sub(p->x[i], p->x_prev[i]), inverse_h);
-		p->v[i] = p->w[i] > 0.0f ? v3_add(mean, half_gravity_step) : mean;
+		vec3 mean = v3_scale(v3_sub(p->point[i].x, p->x_prev[i]), inverse_h);
+		p->v[i] = p->point[i].w > 0.0f ? v3_add(mean, half_gravity_step) : mean;
 	}
 }
 
@@ -92,17 +94,21 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 	int sweeps = sweep == PLAIT_SWEEP_SYMMETRIC ? 2 : 1;
 	switch (kind) {
 	case PLAIT_KIND_STRETCH:
-		plait_solve_distance(&sim->stretch, &sim->particles, inverse_h_squared, sweep);
+		plait_solve_distance(&sim->stretch, &sim->particles, inverse_h_squared, sweep, sim->distance_kernel,
+		                     &sim->parallel);
 		sim->constraint_solves += sweeps * sim->stretch.count;
 		break;
 	case PLAIT_KIND_SHEAR:
-		plait_solve_distance(&sim->shear, &sim->particles, inverse_h_squared, sweep);
+		plait_solve_distance(&sim->shear, &sim->particles, inverse_h_squared, sweep, sim->distance_kernel,
+		                     &sim->parallel);
 		sim->constraint_solves += sweeps * sim->shear.count;
 		break;
 	case PLAIT_KIND_BEND:
-		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared);
+		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared, &sim->parallel);
+		plait_solve_distance(&sim->bend_distance, &sim->particles, inverse_h_squared, sweep,
+		                     sim->distance_kernel, &sim->parallel);
 		plait_solve_rod_bend(&sim->rod_bend, &sim->particles, inverse_h_squared);
-		sim->constraint_solves += sim->bend.count + sim->rod_bend.count;
+		sim->constraint_solves += sim->bend.count + sweeps * sim->bend_distance.count + sim->rod_bend.count;
 		break;
 	case PLAIT_KIND_TETHER:
 		plait_solve_tethers(&sim->tether, &sim->particles);
@@ -120,34 +126,29 @@ static bool state_is_finite(const plait_sim *sim)
 {
 	const plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
-		if (!v3_is_finite(p->x[i]) || !v3_is_finite(p->v[i])) {
+		if (!v3_is_finite(p->point[i].x) || !v3_is_finite(p->v[i])) {
 			return false;
 		}
 	}
 	return true;
 }
 
-plait_result plait_sim_step(plait_sim *sim, plait_error *error)
+static void restore_frame_start(plait_particles *p)
 {
-	plait_result result = plait_sim_update_schedule(sim, error);
-	if (result != PLAIT_OK) {
-		return result;
-	}
+	memcpy(p->point, p->point_frame, sizeof(plait_point) * (size_t)p->count);
+	memcpy(p->v, p->v_frame, sizeof(vec3) * (size_t)p->count);
+}
+
+/* The substeps of one frame (seed 000 §2.2), with the workers running. */
+static plait_result run_substeps(plait_sim *sim, plait_error *error)
+{
 	const plait_settings *settings = &sim->settings;
-	plait_particles *p = &sim->particles;
 	int substeps = settings->substeps;
 	float frame_time = settings->time_scale / settings->fps;
 	float h = frame_time / (float)substeps;
 	float inverse_h_squared = 1.0f / (h * h);
 	bool air = plait_air_active(sim);
 	sim->substep_time = h;
-	sim->contacts = 0;
-	sim->constraint_solves = 0;
-
-	if (p->count > 0) {
-		memcpy(p->x_frame, p->x, sizeof(vec3) * (size_t)p->count);
-		memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
-	}
 	for (int s = 0; s < substeps; ++s) {
 		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;
 		sim->substep = s;
@@ -159,8 +160,6 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 		predict_positions(sim, h, t1);
 		reset_multipliers(sim);
 		if (!plait_contacts_begin_substep(sim)) {
-			memcpy(p->x, p->x_frame, sizeof(vec3) * (size_t)p->count);
-			memcpy(p->v, p->v_frame, sizeof(vec3) * (size_t)p->count);
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
 			                       "out of memory in the collision stage; the frame was not advanced");
 		}
@@ -181,10 +180,34 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 		update_velocities(sim, h);
 		plait_contacts_end_substep(sim);
 	}
+	return PLAIT_OK;
+}
 
+plait_result plait_sim_step(plait_sim *sim, plait_error *error)
+{
+	plait_result result = plait_sim_update_schedule(sim, error);
+	if (result != PLAIT_OK) {
+		return result;
+	}
+	/* Out of memory here only costs speed: uncoloured constraints are projected one by one. */
+	(void)plait_sim_colour(sim);
+	plait_particles *p = &sim->particles;
+	sim->contacts = 0;
+	sim->constraint_solves = 0;
+	if (p->count > 0) {
+		memcpy(p->point_frame, p->point, sizeof(plait_point) * (size_t)p->count);
+		memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
+	}
+
+	plait_parallel_begin(&sim->parallel);
+	result = run_substeps(sim, error);
+	plait_parallel_end(&sim->parallel);
+	if (result != PLAIT_OK) {
+		restore_frame_start(p);
+		return result;
+	}
 	if (!state_is_finite(sim)) {
-		memcpy(p->x, p->x_frame, sizeof(vec3) * (size_t)p->count);
-		memcpy(p->v, p->v_frame, sizeof(vec3) * (size_t)p->count);
+		restore_frame_start(p);
 		return plait_error_set(error, PLAIT_ERROR_NONFINITE,
 		                       "frame %d produced a non-finite position or velocity; try more substeps or "
 		                       "lower resistances",
@@ -197,7 +220,7 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 		sim->colliders[k].transform_start = sim->colliders[k].transform_end;
 	}
 	sim->frame += 1;
-	sim->time += (double)frame_time;
+	sim->time += (double)(sim->settings.time_scale / sim->settings.fps);
 	return PLAIT_OK;
 }
 
@@ -207,11 +230,11 @@ plait_sim_stats plait_sim_measure(const plait_sim *sim)
 	plait_sim_stats stats = {0};
 	double scale = sim->settings.space_scale;
 	for (int i = 0; i < p->count; ++i) {
-		if (!v3_is_finite(p->x[i]) || !v3_is_finite(p->v[i])) {
+		if (!v3_is_finite(p->point[i].x) || !v3_is_finite(p->v[i])) {
 			stats.nonfinite += 1;
 			continue;
 		}
-		if (p->w[i] > 0.0f) {
+		if (p->point[i].w > 0.0f) {
 			double speed_sq = (double)v3_length_sq(p->v[i]) * scale * scale;
 			stats.kinetic_energy += 0.5 * (double)p->mass[i] * speed_sq;
 		}

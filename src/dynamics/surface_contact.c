@@ -38,8 +38,8 @@ static void refit(plait_mesh_shape *shape, const plait_particles *p, int first, 
 				const int *tri = shape->triangles[shape->triangle_order[k]];
 				for (int c = 0; c < 3; ++c) {
 					int i = first + tri[c];
-					lower = v3_min(lower, v3_min(p->x[i], p->x_prev[i]));
-					upper = v3_max(upper, v3_max(p->x[i], p->x_prev[i]));
+					lower = v3_min(lower, v3_min(p->point[i].x, p->x_prev[i]));
+					upper = v3_max(upper, v3_max(p->point[i].x, p->x_prev[i]));
 				}
 			}
 			lower = v3_sub(lower, margin);
@@ -54,10 +54,9 @@ static void refit(plait_mesh_shape *shape, const plait_particles *p, int first, 
 	}
 }
 
-static vec3 blend(const vec3 *x, const int *corners, const float *weights)
+static vec3 blend(vec3 a, vec3 b, vec3 c, const float *weights)
 {
-	return v3_add(v3_add(v3_scale(x[corners[0]], weights[0]), v3_scale(x[corners[1]], weights[1])),
-	              v3_scale(x[corners[2]], weights[2]));
+	return v3_add(v3_add(v3_scale(a, weights[0]), v3_scale(b, weights[1])), v3_scale(c, weights[2]));
 }
 
 /* Whether the path of vertex i over the substep comes within distance_needed of the moving
@@ -66,7 +65,7 @@ static bool swept_through(const plait_particles *p, int i, const int *corners, f
 {
 	plait_ccd_motion_float m;
 	vec3 start[4] = {p->x_prev[i], p->x_prev[corners[0]], p->x_prev[corners[1]], p->x_prev[corners[2]]};
-	vec3 end[4] = {p->x[i], p->x[corners[0]], p->x[corners[1]], p->x[corners[2]]};
+	vec3 end[4] = {p->point[i].x, p->point[corners[0]].x, p->point[corners[1]].x, p->point[corners[2]].x};
 	for (int k = 0; k < 4; ++k) {
 		m.start[k][0] = start[k].x;
 		m.start[k][1] = start[k].y;
@@ -87,22 +86,22 @@ static bool swept_through(const plait_particles *p, int i, const int *corners, f
 static bool resolve_pair(plait_particles *p, int i, const int *corners, float distance_needed, float friction,
                          bool fast)
 {
-	vec3 a = p->x[corners[0]], b = p->x[corners[1]], c = p->x[corners[2]];
+	vec3 a = p->point[corners[0]].x, b = p->point[corners[1]].x, c = p->point[corners[2]].x;
 	vec3 a0 = p->x_prev[corners[0]], b0 = p->x_prev[corners[1]], c0 = p->x_prev[corners[2]];
 	int region;
 	float start_weights[3];
 	vec3 q0 = plait_closest_point_on_triangle(p->x_prev[i], a0, b0, c0, &region, start_weights);
 	vec3 face0 = v3_normalize(v3_cross(v3_sub(b0, a0), v3_sub(c0, a0)));
 	float weights[3];
-	vec3 q = plait_closest_point_on_triangle(p->x[i], a, b, c, &region, weights);
+	vec3 q = plait_closest_point_on_triangle(p->point[i].x, a, b, c, &region, weights);
 	vec3 face = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
 	if (v3_length_sq(face) == 0.0f || v3_length_sq(face0) == 0.0f) {
 		return false;
 	}
 	float side = v3_dot(v3_sub(p->x_prev[i], q0), face0) >= 0.0f ? 1.0f : -1.0f;
 	vec3 n = v3_scale(face, side);
-	float distance = v3_dot(v3_sub(p->x[i], q), n);
-	float reach = v3_length(v3_sub(p->x[i], q));
+	float distance = v3_dot(v3_sub(p->point[i].x, q), n);
+	float reach = v3_length(v3_sub(p->point[i].x, q));
 	bool beside = region != 0 && reach >= distance_needed;
 	/* Ending beside the triangle out of reach, or far behind its plane, is a crossing only if
 	 * the path really went through the thickened triangle: ask the continuous test. (A vertex
@@ -118,7 +117,7 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 		/* Within reach of an edge or corner: apart along the line to it (for a vertex in the
 		 * sheet's own plane, that is within the plane, not out of it). */
 		if (reach > 1e-7f) {
-			n = v3_scale(v3_sub(p->x[i], q), 1.0f / reach);
+			n = v3_scale(v3_sub(p->point[i].x, q), 1.0f / reach);
 		}
 		distance = reach;
 	}
@@ -133,12 +132,12 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 	 * colliders do not hold: on them the last normal is a poor guide where cloth folds, and
 	 * holding there tangled draped cloths. */
 	const vec3 *toward = p->contact_normal;
-	float wi = p->w[i], wk[3];
+	float wi = p->point[i].w, wk[3];
 	bool i_held = (p->flags[i] & PLAIT_PARTICLE_SUPPORTED) && v3_dot(n, toward[i]) < 0.0f;
 	bool k_held[3];
 	bool any_free = !i_held && wi > 0.0f;
 	for (int k = 0; k < 3; ++k) {
-		wk[k] = p->w[corners[k]];
+		wk[k] = p->point[corners[k]].w;
 		k_held[k] = (p->flags[corners[k]] & PLAIT_PARTICLE_SUPPORTED) && v3_dot(n, toward[corners[k]]) > 0.0f;
 		any_free = any_free || (!k_held[k] && wk[k] > 0.0f);
 	}
@@ -156,8 +155,10 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 		return false;
 	}
 	/* Friction on the relative tangential motion of the substep, within friction x depth. */
-	vec3 relative = v3_sub(v3_sub(p->x[i], p->x_prev[i]),
-	                       v3_sub(blend(p->x, corners, weights), blend(p->x_prev, corners, weights)));
+	vec3 relative =
+	    v3_sub(v3_sub(p->point[i].x, p->x_prev[i]),
+	           v3_sub(blend(p->point[corners[0]].x, p->point[corners[1]].x, p->point[corners[2]].x, weights),
+	                  blend(p->x_prev[corners[0]], p->x_prev[corners[1]], p->x_prev[corners[2]], weights)));
 	vec3 tangential = v3_mul_add(relative, -v3_dot(relative, n), n);
 	float tangential_length = v3_length(tangential);
 	vec3 move = v3_scale(n, depth);
@@ -168,9 +169,9 @@ static bool resolve_pair(plait_particles *p, int i, const int *corners, float di
 	}
 	/* Shared by inverse mass; the triangle's share spread by barycentric weight. */
 	vec3 step = v3_scale(move, 1.0f / denominator);
-	p->x[i] = v3_mul_add(p->x[i], wi, step);
+	p->point[i].x = v3_mul_add(p->point[i].x, wi, step);
 	for (int k = 0; k < 3; ++k) {
-		p->x[corners[k]] = v3_mul_add(p->x[corners[k]], -weights[k] * wk[k], step);
+		p->point[corners[k]].x = v3_mul_add(p->point[corners[k]].x, -weights[k] * wk[k], step);
 	}
 	return true;
 }
@@ -219,7 +220,8 @@ static void visit_triangle(int t, void *context)
 		}
 	}
 	/* Fast relative motion may cross a triangle and end beside it: checked continuously. */
-	vec3 relative = v3_sub(v3_sub(p->x[i], p->x_prev[i]), v3_sub(p->x[corners[0]], p->x_prev[corners[0]]));
+	vec3 relative =
+	    v3_sub(v3_sub(p->point[i].x, p->x_prev[i]), v3_sub(p->point[corners[0]].x, p->x_prev[corners[0]]));
 	bool fast = v3_length(relative) >= distance_needed;
 	pass->contacts += resolve_pair(p, i, corners, distance_needed, pass->friction, fast);
 }
@@ -261,8 +263,8 @@ int plait_collide_surfaces(plait_sim *sim)
 			                     friction_of(mat, surface_material),
 			                     own ? i - surface->first : -1,
 			                     0};
-			plait_mesh_shape_visit(surface->shape, v3_min(p->x[i], p->x_prev[i]),
-			                       v3_max(p->x[i], p->x_prev[i]), false, visit_triangle, &pass);
+			plait_mesh_shape_visit(surface->shape, v3_min(p->point[i].x, p->x_prev[i]),
+			                       v3_max(p->point[i].x, p->x_prev[i]), false, visit_triangle, &pass);
 			contacts += pass.contacts;
 		}
 	}

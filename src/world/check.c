@@ -66,9 +66,12 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 	const plait_allocator *a = &world->allocator;
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)faces);
 	int *soup = plait_alloc(a, sizeof(int) * (size_t)indices);
-	if (sizes == NULL || soup == NULL) {
+	int particle_count = world->sim.particles.count;
+	vec3 *positions = plait_alloc(a, sizeof(vec3) * (size_t)particle_count);
+	if (sizes == NULL || soup == NULL || positions == NULL) {
 		plait_free(a, sizes);
 		plait_free(a, soup);
+		plait_free(a, positions);
 		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory checking intersections");
 	}
 	int f = 0, k = 0;
@@ -86,11 +89,15 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 			soup[k++] = object->first_particle + t->polygon_indices[i];
 		}
 	}
-	plait_mesh_def mesh = {world->sim.particles.x, world->sim.particles.count, sizes, faces, soup};
+	for (int i = 0; i < particle_count; ++i) {
+		positions[i] = world->sim.particles.point[i].x;
+	}
+	plait_mesh_def mesh = {positions, particle_count, sizes, faces, soup};
 	plait_mesh_shape shape;
 	plait_result result = plait_mesh_shape_build(&shape, a, &mesh, error);
 	plait_free(a, sizes);
 	plait_free(a, soup);
+	plait_free(a, positions);
 	if (result != PLAIT_OK) {
 		return result;
 	}

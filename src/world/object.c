@@ -21,6 +21,7 @@
 #include "collision/mesh_shape.h"
 #include "dynamics/sim_store.h"
 #include "dynamics/surface_contact.h"
+#include "world/bend_pairs.h"
 #include "world/tethers.h"
 #include "world/world.h"
 
@@ -168,7 +169,7 @@ static void apply_pins(plait_sim *sim, int first, const int *pins, int pin_count
 	for (int k = 0; k < pin_count; ++k) {
 		int i = first + pins[k];
 		sim->particles.flags[i] |= PLAIT_PARTICLE_PINNED;
-		sim->particles.w[i] = 0.0f;
+		sim->particles.point[i].w = 0.0f;
 	}
 }
 
@@ -210,6 +211,11 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		                (int)def->tethers);
 		return id;
 	}
+	if (def->bend_model < PLAIT_BEND_DIHEDRAL || def->bend_model > PLAIT_BEND_DISTANCE) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown bend model %d", label,
+		                (int)def->bend_model);
+		return id;
+	}
 	for (int i = 0; def->vertex_masses != NULL && i < mesh->vertex_count; ++i) {
 		if (!(def->vertex_masses[i] > 0.0f) || !isfinite(def->vertex_masses[i])) {
 			plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: vertex_masses[%d] must be > 0, got %g",
@@ -246,6 +252,13 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		bend_count += topology->edge_triangle_count[e] == 2;
 	}
 	plait_allocator *a = &world->allocator;
+	bool bend_distance = def->bend_model == PLAIT_BEND_DISTANCE && def->bend_resistance > 0.0f;
+	int(*bend_pairs)[2] =
+	    bend_distance ? plait_alloc(a, sizeof *bend_pairs * (size_t)(2 * topology->edge_count + 1)) : NULL;
+	int bend_pair_count = bend_pairs != NULL ? plait_bend_pairs(topology, x, a, bend_pairs) : 0;
+	if (bend_distance) {
+		bend_count = 0;
+	}
 	float *polygon_area = plait_alloc_zero(a, (size_t)topology->polygon_count, sizeof(float));
 	float *triangle_area = plait_alloc_zero(a, (size_t)topology->triangle_count, sizeof(float));
 	float *vertex_area = plait_alloc_zero(a, (size_t)vertex_count, sizeof(float));
@@ -254,12 +267,15 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	          plait_sim_reserve_distance(sim, &sim->stretch, topology->edge_count) &&
 	          plait_sim_reserve_distance(sim, &sim->shear, 2 * quad_count) &&
 	          plait_sim_reserve_bend(sim, bend_count) &&
+	          (!bend_distance || (bend_pairs != NULL && bend_pair_count >= 0)) &&
+	          plait_sim_reserve_distance(sim, &sim->bend_distance, bend_pair_count) &&
 	          plait_sim_reserve_aero(sim, topology->triangle_count) &&
 	          (def->tethers == PLAIT_TETHER_NONE || plait_sim_reserve_tethers(sim, vertex_count));
 	if (!ok) {
 		plait_free(a, polygon_area);
 		plait_free(a, triangle_area);
 		plait_free(a, vertex_area);
+		plait_free(a, bend_pairs);
 		abandon_object(world, object);
 		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
 		return (plait_object_id){0};
@@ -311,7 +327,6 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	int first = object->first_particle;
 	apply_pins(sim, first, def->pins, def->pin_count);
 
-	int first_stretch = sim->stretch.count, first_shear = sim->shear.count, first_bend = sim->bend.count;
 	/* Stretch and compression on polygon edges (and fan diagonals of polygons larger than
 	 * quads); shear on both diagonals of each quad (seed 003: separate shear). */
 	float stretch_alpha = stiffness_compliance(def->stretch_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
@@ -356,7 +371,17 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 			}
 		}
 	}
-	if (def->bend_resistance > 0.0f) {
+	if (bend_distance) {
+		float bend_alpha = stiffness_compliance(def->bend_resistance, STRETCH_STIFFNESS_PER_RESISTANCE);
+		for (int k = 0; k < bend_pair_count; ++k) {
+			int v0 = bend_pairs[k][0], v1 = bend_pairs[k][1];
+			float rest = v3_length(v3_sub(x[v1], x[v0]));
+			plait_sim_add_distance(&sim->bend_distance, first + v0, first + v1, rest * def->rest_length_scale,
+			                       bend_alpha, bend_alpha);
+		}
+	}
+	plait_free(a, bend_pairs);
+	if (def->bend_resistance > 0.0f && !bend_distance) {
 		float bending_stiffness = def->bend_resistance * BEND_STIFFNESS_PER_RESISTANCE / (scale * scale);
 		for (int e = 0; e < topology->edge_count; ++e) {
 			if (topology->edge_triangle_count[e] != 2) {
@@ -454,10 +479,6 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	/* Should the tethers' scratch memory run out, the cloth still works, untethered. */
 	(void)plait_build_tethers(sim, topology, x, first, def->pins, def->pin_count, def->tethers,
 	                          def->tether_scale, def->tether_stiffness);
-	/* Out of memory here only loses speed, never correctness: the order stays as built. */
-	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
-	plait_sim_batch_distance(sim, &sim->shear, first_shear);
-	plait_sim_batch_bend(sim, first_bend);
 
 	int override = def->iterations;
 	object->importance[PLAIT_KIND_STRETCH] =
@@ -535,7 +556,6 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	int first = object->first_particle;
 	apply_pins(sim, first, def->pins, def->pin_count);
 
-	int first_stretch = sim->stretch.count;
 	const plait_vec3 *x = def->positions;
 	if (def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f) {
 		/* alpha = L / EA with EA = R * 100 N, converted to scene units by 1 / space_scale. */
@@ -550,7 +570,6 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 			                       scale_compliance(compression_alpha, rest));
 		}
 	}
-	plait_sim_batch_distance(sim, &sim->stretch, first_stretch);
 	if (def->bend_resistance > 0.0f) {
 		float bending = def->bend_resistance * BEND_STIFFNESS_PER_RESISTANCE / (scale * scale * scale);
 		for (int i = 1; i + 1 < n; ++i) {

@@ -195,9 +195,9 @@ plait_result plait_object_get_positions(plait_object_id id, int first, int count
 	if (object == NULL) {
 		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
 	}
-	if (count > 0) {
-		memcpy(out, id.world->sim.particles.x + object->first_particle + first,
-		       sizeof(plait_vec3) * (size_t)count);
+	const plait_point *points = id.world->sim.particles.point + object->first_particle + first;
+	for (int k = 0; k < count; ++k) {
+		out[k] = points[k].x;
 	}
 	return PLAIT_OK;
 }
@@ -240,7 +240,7 @@ plait_result plait_object_set_positions(plait_object_id id, int first, int count
 	plait_particles *p = &id.world->sim.particles;
 	for (int k = 0; k < count; ++k) {
 		int i = object->first_particle + first + k;
-		p->x[i] = positions[k];
+		p->point[i].x = positions[k];
 		if (p->flags[i] & PLAIT_PARTICLE_PINNED) {
 			p->pin_start[i] = positions[k];
 			p->pin_end[i] = positions[k];
@@ -294,8 +294,8 @@ plait_result plait_object_pin_vertex(plait_object_id id, int vertex, plait_vec3 
 	plait_particles *p = &id.world->sim.particles;
 	int i = object->first_particle + vertex;
 	p->flags[i] |= PLAIT_PARTICLE_PINNED;
-	p->w[i] = 0.0f;
-	p->pin_start[i] = p->x[i];
+	p->point[i].w = 0.0f;
+	p->pin_start[i] = p->point[i].x;
 	p->pin_end[i] = target;
 	p->v[i] = v3(0.0f, 0.0f, 0.0f);
 	return PLAIT_OK;
@@ -310,7 +310,7 @@ plait_result plait_object_unpin_vertex(plait_object_id id, int vertex, plait_err
 	plait_particles *p = &id.world->sim.particles;
 	int i = object->first_particle + vertex;
 	p->flags[i] &= (uint8_t)~PLAIT_PARTICLE_PINNED;
-	p->w[i] = 1.0f / p->mass[i];
+	p->point[i].w = 1.0f / p->mass[i];
 	return PLAIT_OK;
 }
 

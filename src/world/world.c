@@ -7,6 +7,7 @@
 #include "collision/mesh_shape.h"
 #include "core/error.h"
 #include "dynamics/contact.h"
+#include "dynamics/distance_kernel.h"
 #include "dynamics/sim_store.h"
 #include "dynamics/solver.h"
 
@@ -83,6 +84,23 @@ static plait_result validate_world_def(const plait_world_def *def, bool check_ho
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
 		                       "alloc and free hooks must be set together");
 	}
+	if (check_hooks && (def->enqueue_task == NULL) != (def->finish_task == NULL)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "enqueue_task and finish_task hooks must be set together");
+	}
+	if (check_hooks && (def->worker_count < 1 || def->worker_count > PLAIT_MAX_WORKERS)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "worker_count must be in 1..%d, got %d",
+		                       PLAIT_MAX_WORKERS, def->worker_count);
+	}
+	if (check_hooks && (def->simd < PLAIT_SIMD_AUTO || def->simd > PLAIT_SIMD_AVX512)) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "simd must be a plait_simd value, got %d",
+		                       (int)def->simd);
+	}
+	if (check_hooks && !plait_simd_supported(def->simd)) {
+		static const char *const names[] = {"auto", "scalar", "AVX2", "AVX-512"};
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "simd %s was asked for, but this processor does not run it", names[def->simd]);
+	}
 	return PLAIT_OK;
 }
 
@@ -123,6 +141,10 @@ plait_world_id plait_create_world(const plait_world_def *def, plait_error *error
 	world->allocator = allocator;
 	world->def = *def;
 	plait_sim_init(&world->sim, &allocator);
+	world->sim.simd = def->simd == PLAIT_SIMD_AUTO ? plait_simd_best() : def->simd;
+	world->sim.distance_kernel = plait_distance_kernel_for(world->sim.simd);
+	plait_parallel_init(&world->sim.parallel, def->enqueue_task, def->finish_task, def->task_context,
+	                    def->worker_count);
 	apply_settings(world);
 	id.world = world;
 	return id;
@@ -156,6 +178,17 @@ void plait_destroy_world(plait_world_id id)
 	plait_free(&allocator, world);
 }
 
+plait_simd plait_world_get_simd(plait_world_id id)
+{
+	plait_world *world = resolve_world(id);
+	return world != NULL ? world->sim.simd : PLAIT_SIMD_SCALAR;
+}
+
+bool plait_simd_is_supported(plait_simd simd)
+{
+	return simd >= PLAIT_SIMD_AUTO && simd <= PLAIT_SIMD_AVX512 && plait_simd_supported(simd);
+}
+
 bool plait_world_is_valid(plait_world_id id)
 {
 	return id.world != NULL;
@@ -176,6 +209,11 @@ plait_result plait_world_set_def(plait_world_id id, const plait_world_def *def, 
 	kept.alloc = world->def.alloc;
 	kept.free = world->def.free;
 	kept.allocator_context = world->def.allocator_context;
+	kept.enqueue_task = world->def.enqueue_task;
+	kept.finish_task = world->def.finish_task;
+	kept.task_context = world->def.task_context;
+	kept.worker_count = world->def.worker_count;
+	kept.simd = world->def.simd;
 	world->def = kept;
 	apply_settings(world);
 	return PLAIT_OK;
@@ -284,9 +322,10 @@ void plait_world_update_kinds(plait_world *world)
 			}
 		}
 	}
+	sim->colouring_dirty = true; /* objects came or went: colour the constraints again */
 	sim->kind_active[PLAIT_KIND_STRETCH] = sim->stretch.count > 0;
 	sim->kind_active[PLAIT_KIND_SHEAR] = sim->shear.count > 0;
-	sim->kind_active[PLAIT_KIND_BEND] = sim->bend.count + sim->rod_bend.count > 0;
+	sim->kind_active[PLAIT_KIND_BEND] = sim->bend.count + sim->bend_distance.count + sim->rod_bend.count > 0;
 	sim->kind_active[PLAIT_KIND_TETHER] = sim->tether.count > 0;
 	bool any_collider = false;
 	int colliding_objects = 0;

@@ -1,0 +1,168 @@
+#include "core/parallel.h"
+
+#include <string.h>
+
+#if !defined(__STDC_NO_THREADS__)
+#include <threads.h>
+#endif
+
+#define CHUNK_BITS 20
+#define CHUNK_MASK ((UINT64_C(1) << CHUNK_BITS) - 1)
+#define GENERATION_MASK 0xFFFFFFu
+
+static inline uint64_t pack_ticket(uint32_t generation, int chunks, int next)
+{
+	return ((uint64_t)generation << (2 * CHUNK_BITS)) | ((uint64_t)chunks << CHUNK_BITS) | (uint64_t)next;
+}
+static inline uint32_t ticket_generation(uint64_t ticket)
+{
+	return (uint32_t)(ticket >> (2 * CHUNK_BITS));
+}
+static inline int ticket_chunks(uint64_t ticket)
+{
+	return (int)((ticket >> CHUNK_BITS) & CHUNK_MASK);
+}
+static inline int ticket_next(uint64_t ticket)
+{
+	return (int)(ticket & CHUNK_MASK);
+}
+
+/* Busy-wait step: a pause for the first spins, then give the processor away, so that more
+ * workers than cores (or a busy machine) slow the frame down instead of stalling it. */
+static void spin_wait(int *spins)
+{
+	*spins += 1;
+	if (*spins < 2000) {
+#if defined(__x86_64__) || defined(__i386__)
+		__builtin_ia32_pause();
+#endif
+		return;
+	}
+#if !defined(__STDC_NO_THREADS__)
+	thrd_yield();
+#endif
+}
+
+void plait_parallel_init(plait_parallel *parallel, plait_enqueue_task_fn *enqueue_task,
+                         plait_finish_task_fn *finish_task, void *user_context, int worker_count)
+{
+	memset(parallel, 0, sizeof *parallel);
+	bool hooks = enqueue_task != NULL && finish_task != NULL;
+	parallel->enqueue_task = enqueue_task;
+	parallel->finish_task = finish_task;
+	parallel->user_context = user_context;
+	worker_count = worker_count < 1 ? 1 : worker_count;
+	worker_count = worker_count > PLAIT_MAX_WORKERS ? PLAIT_MAX_WORKERS : worker_count;
+	parallel->worker_count = hooks ? worker_count : 1;
+	atomic_init(&parallel->ticket, 0);
+	atomic_init(&parallel->done, 0);
+	atomic_init(&parallel->quit, 0);
+}
+
+/* Claims and runs chunks of loop `generation` until none is left. The loop's description is
+ * read only after a chunk was claimed: the calling thread cannot move on to another loop while
+ * that chunk is pending, so the description is the claimed loop's. */
+static void run_chunks(plait_parallel *parallel, uint32_t generation)
+{
+	uint64_t ticket = atomic_load_explicit(&parallel->ticket, memory_order_acquire);
+	for (;;) {
+		if (ticket_generation(ticket) != generation || ticket_next(ticket) >= ticket_chunks(ticket)) {
+			return;
+		}
+		if (atomic_compare_exchange_weak_explicit(&parallel->ticket, &ticket, ticket + 1,
+		                                          memory_order_acq_rel, memory_order_acquire)) {
+			int chunk = ticket_next(ticket);
+			int begin = parallel->begin + chunk * parallel->grain;
+			int end = begin + parallel->grain < parallel->end ? begin + parallel->grain : parallel->end;
+			parallel->fn(parallel->context, begin, end);
+			atomic_fetch_add_explicit(&parallel->done, 1, memory_order_release);
+			ticket = atomic_load_explicit(&parallel->ticket, memory_order_acquire);
+		}
+	}
+}
+
+static void worker_task(int start_index, int end_index, int worker_index, void *task_context)
+{
+	(void)start_index;
+	(void)end_index;
+	(void)worker_index;
+	plait_parallel *parallel = task_context;
+	uint32_t seen = ticket_generation(atomic_load_explicit(&parallel->ticket, memory_order_acquire));
+	for (;;) {
+		int spins = 0;
+		uint64_t ticket;
+		for (;;) {
+			ticket = atomic_load_explicit(&parallel->ticket, memory_order_acquire);
+			if (ticket_generation(ticket) != seen) {
+				break;
+			}
+			if (atomic_load_explicit(&parallel->quit, memory_order_acquire)) {
+				return;
+			}
+			spin_wait(&spins);
+		}
+		seen = ticket_generation(ticket);
+		run_chunks(parallel, seen);
+	}
+}
+
+void plait_parallel_begin(plait_parallel *parallel)
+{
+	if (parallel->worker_count <= 1 || parallel->running) {
+		return;
+	}
+	atomic_store_explicit(&parallel->quit, 0, memory_order_release);
+	parallel->running = true;
+	for (int k = 1; k < parallel->worker_count; ++k) {
+		parallel->tasks[k] = parallel->enqueue_task(worker_task, 1, 1, parallel, parallel->user_context);
+	}
+}
+
+void plait_parallel_end(plait_parallel *parallel)
+{
+	if (!parallel->running) {
+		return;
+	}
+	atomic_store_explicit(&parallel->quit, 1, memory_order_release);
+	for (int k = 1; k < parallel->worker_count; ++k) {
+		if (parallel->tasks[k] != NULL) {
+			parallel->finish_task(parallel->tasks[k], parallel->user_context);
+			parallel->tasks[k] = NULL;
+		}
+	}
+	parallel->running = false;
+}
+
+void plait_parallel_for(plait_parallel *parallel, plait_range_fn *fn, void *context, int begin, int end,
+                        int grain)
+{
+	if (end <= begin) {
+		return;
+	}
+	grain = grain < 1 ? 1 : grain;
+	int count = end - begin;
+	if (!parallel->running || count <= grain) {
+		fn(context, begin, end);
+		return;
+	}
+	int chunks = (count + grain - 1) / grain;
+	if ((uint64_t)chunks > CHUNK_MASK) {
+		grain = (int)(((uint64_t)count + CHUNK_MASK - 1) / CHUNK_MASK);
+		chunks = (count + grain - 1) / grain;
+	}
+	parallel->fn = fn;
+	parallel->context = context;
+	parallel->begin = begin;
+	parallel->end = end;
+	parallel->grain = grain;
+	atomic_store_explicit(&parallel->done, 0, memory_order_relaxed);
+	parallel->generation = (parallel->generation + 1) & GENERATION_MASK;
+	parallel->generation = parallel->generation == 0 ? 1 : parallel->generation;
+	atomic_store_explicit(&parallel->ticket, pack_ticket(parallel->generation, chunks, 0),
+	                      memory_order_release);
+	run_chunks(parallel, parallel->generation);
+	int spins = 0;
+	while (atomic_load_explicit(&parallel->done, memory_order_acquire) < chunks) {
+		spin_wait(&spins);
+	}
+}

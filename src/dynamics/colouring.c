@@ -1,0 +1,224 @@
+#include "dynamics/colouring.h"
+
+#include <stdint.h>
+#include <string.h>
+
+#define NO_COLOUR (-1)
+
+void plait_colouring_clear(plait_colouring *colouring, const plait_allocator *allocator)
+{
+	plait_free(allocator, colouring->region_start);
+	plait_free(allocator, colouring->run_start);
+	memset(colouring, 0, sizeof *colouring);
+}
+
+typedef struct colouring_state {
+	const int *vertices;
+	int arity;
+	uint64_t *used; /* colours taken, per particle, in the current slab */
+	int *colour;    /* per constraint */
+	int *order;     /* output: constraint at each position */
+	int *run_start; /* output */
+	int position, runs;
+} colouring_state;
+
+/* Colours the constraints list[0..n) slab by slab, appending them to the order and their runs. */
+static void colour_list(colouring_state *state, const int *list, int n, int slab_size)
+{
+	int arity = state->arity;
+	for (int first = 0; first < n; first += slab_size) {
+		int last = first + slab_size < n ? first + slab_size : n;
+		int sizes[PLAIT_MAX_COLOURS] = {0};
+		int colour_count = 0, uncoloured = 0;
+		for (int k = first; k < last; ++k) {
+			const int *tuple = state->vertices + (size_t)list[k] * (size_t)arity;
+			uint64_t taken = 0;
+			for (int a = 0; a < arity; ++a) {
+				taken |= state->used[tuple[a]];
+			}
+			if (taken == UINT64_MAX) {
+				state->colour[list[k]] = NO_COLOUR;
+				++uncoloured;
+				continue;
+			}
+			int colour = 0;
+			while (taken & ((uint64_t)1 << colour)) {
+				++colour;
+			}
+			state->colour[list[k]] = colour;
+			sizes[colour] += 1;
+			colour_count = colour + 1 > colour_count ? colour + 1 : colour_count;
+			for (int a = 0; a < arity; ++a) {
+				state->used[tuple[a]] |= (uint64_t)1 << colour;
+			}
+		}
+		/* Counting sort of the slab by colour, stable; the uncoloured follow, one run each. */
+		int next[PLAIT_MAX_COLOURS + 1];
+		int position = state->position;
+		for (int colour = 0; colour < colour_count; ++colour) {
+			state->run_start[state->runs++] = position;
+			next[colour] = position;
+			position += sizes[colour];
+		}
+		next[colour_count] = position;
+		for (int u = 0; u < uncoloured; ++u) {
+			state->run_start[state->runs++] = position + u;
+		}
+		for (int k = first; k < last; ++k) {
+			int colour = state->colour[list[k]];
+			state->order[next[colour == NO_COLOUR ? colour_count : colour]++] = list[k];
+		}
+		state->position += last - first;
+		/* The next slab starts with every particle free. */
+		for (int k = first; k < last; ++k) {
+			const int *tuple = state->vertices + (size_t)list[k] * (size_t)arity;
+			for (int a = 0; a < arity; ++a) {
+				state->used[tuple[a]] = 0;
+			}
+		}
+	}
+}
+
+bool plait_colour_constraints(const plait_allocator *allocator, const int *vertices, int arity, int count,
+                              int particle_count, int *order, plait_colouring *colouring)
+{
+	memset(colouring, 0, sizeof *colouring);
+	if (count <= 0) {
+		return true;
+	}
+	int regions = count / PLAIT_REGION_SIZE;
+	regions = regions < 1 ? 1 : regions > PLAIT_MAX_REGIONS ? PLAIT_MAX_REGIONS : regions;
+	/* Runs: at most PLAIT_MAX_COLOURS per slab, plus one per uncoloured constraint. */
+	size_t run_capacity =
+	    ((size_t)count / PLAIT_SLAB_SIZE + (size_t)regions + 2) * PLAIT_MAX_COLOURS + (size_t)count + 1;
+	uint64_t *used =
+	    plait_alloc_zero(allocator, (size_t)(particle_count > 0 ? particle_count : 1), sizeof(uint64_t));
+	int *colour = plait_alloc(allocator, sizeof(int) * (size_t)count);
+	int *region_of = plait_alloc(allocator, sizeof(int) * (size_t)count);
+	int *list = plait_alloc(allocator, sizeof(int) * (size_t)count);
+	int *run_start = plait_alloc(allocator, sizeof(int) * run_capacity);
+	int *region_start = plait_alloc(allocator, sizeof(int) * (size_t)(regions + 2));
+	bool ok = used != NULL && colour != NULL && region_of != NULL && list != NULL && run_start != NULL &&
+	          region_start != NULL;
+	if (ok) {
+		/* Region of each constraint: that of its particles when they agree, else the boundary. */
+		int bucket_size[PLAIT_MAX_REGIONS + 1] = {0};
+		for (int c = 0; c < count; ++c) {
+			const int *tuple = vertices + (size_t)c * (size_t)arity;
+			int region = (int)((int64_t)tuple[0] * regions / particle_count);
+			for (int a = 1; a < arity; ++a) {
+				region = (int)((int64_t)tuple[a] * regions / particle_count) == region ? region : regions;
+			}
+			region_of[c] = region;
+			bucket_size[region] += 1;
+		}
+		int bucket_first[PLAIT_MAX_REGIONS + 1], next[PLAIT_MAX_REGIONS + 1];
+		for (int r = 0, first = 0; r <= regions; ++r) {
+			bucket_first[r] = first;
+			next[r] = first;
+			first += bucket_size[r];
+		}
+		for (int c = 0; c < count; ++c) {
+			list[next[region_of[c]]++] = c;
+		}
+		colouring_state state = {vertices, arity, used, colour, order, run_start, 0, 0};
+		for (int r = 0; r <= regions; ++r) {
+			region_start[r] = state.runs;
+			/* The boundary is small and scattered: coloured whole, for long runs. */
+			int slab = r < regions ? PLAIT_SLAB_SIZE : count;
+			colour_list(&state, list + bucket_first[r], bucket_size[r], slab);
+		}
+		run_start[state.runs] = count;
+		colouring->region_count = regions;
+		colouring->run_count = state.runs;
+		colouring->region_start = region_start;
+		colouring->run_start = run_start;
+	} else {
+		plait_free(allocator, run_start);
+		plait_free(allocator, region_start);
+	}
+	plait_free(allocator, used);
+	plait_free(allocator, colour);
+	plait_free(allocator, region_of);
+	plait_free(allocator, list);
+	return ok;
+}
+
+/* Applies order to count elements of `size` bytes at data, through scratch (room for count
+ * elements of the largest size). */
+static void permute(char *scratch, void *data, size_t size, int count, const int *order)
+{
+	if (count <= 0) {
+		return;
+	}
+	char *base = data;
+	for (int k = 0; k < count; ++k) {
+		memcpy(scratch + size * (size_t)k, base + size * (size_t)order[k], size);
+	}
+	memcpy(base, scratch, size * (size_t)count);
+}
+
+enum { DISTANCE_BLOCKS = 3, BLOCKS = DISTANCE_BLOCKS + 1 };
+
+/* Every block's order is computed first and applied only when all succeeded, so a failure
+ * leaves every block as it was. */
+bool plait_sim_colour(plait_sim *sim)
+{
+	if (!sim->colouring_dirty) {
+		return true;
+	}
+	const plait_allocator *a = &sim->allocator;
+	plait_distance_block *distance[DISTANCE_BLOCKS] = {&sim->stretch, &sim->shear, &sim->bend_distance};
+	plait_bend_block *bend = &sim->bend;
+	int counts[BLOCKS] = {sim->stretch.count, sim->shear.count, sim->bend_distance.count, bend->count};
+	const int *tuples[BLOCKS] = {NULL, NULL, NULL, NULL};
+	int arity[BLOCKS] = {2, 2, 2, 4};
+	for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
+		tuples[k] = counts[k] > 0 ? &distance[k]->pair[0][0] : NULL;
+	}
+	tuples[DISTANCE_BLOCKS] = counts[DISTANCE_BLOCKS] > 0 ? &bend->quad[0][0] : NULL;
+
+	int largest = 1;
+	for (int k = 0; k < BLOCKS; ++k) {
+		largest = counts[k] > largest ? counts[k] : largest;
+	}
+	char *scratch = plait_alloc(a, sizeof bend->quad[0] * (size_t)largest);
+	int *orders[BLOCKS] = {NULL, NULL, NULL, NULL};
+	plait_colouring colourings[BLOCKS];
+	memset(colourings, 0, sizeof colourings);
+	bool ok = scratch != NULL;
+	for (int k = 0; k < BLOCKS && ok; ++k) {
+		orders[k] = plait_alloc(a, sizeof(int) * (size_t)(counts[k] > 0 ? counts[k] : 1));
+		ok = orders[k] != NULL && plait_colour_constraints(a, tuples[k], arity[k], counts[k],
+		                                                   sim->particles.count, orders[k], &colourings[k]);
+	}
+	if (ok) {
+		for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
+			plait_distance_block *b = distance[k];
+			permute(scratch, b->pair, sizeof *b->pair, b->count, orders[k]);
+			permute(scratch, b->rest, sizeof(float), b->count, orders[k]);
+			permute(scratch, b->compliance_tension, sizeof(float), b->count, orders[k]);
+			permute(scratch, b->compliance_compression, sizeof(float), b->count, orders[k]);
+			permute(scratch, b->lambda, sizeof(float), b->count, orders[k]);
+			plait_colouring_clear(&b->colouring, a);
+			b->colouring = colourings[k];
+		}
+		const int *order = orders[DISTANCE_BLOCKS];
+		permute(scratch, bend->quad, sizeof *bend->quad, bend->count, order);
+		permute(scratch, bend->rest_angle, sizeof(float), bend->count, order);
+		permute(scratch, bend->compliance, sizeof(float), bend->count, order);
+		permute(scratch, bend->lambda, sizeof(float), bend->count, order);
+		plait_colouring_clear(&bend->colouring, a);
+		bend->colouring = colourings[DISTANCE_BLOCKS];
+		sim->colouring_dirty = false;
+	} else {
+		for (int k = 0; k < BLOCKS; ++k) {
+			plait_colouring_clear(&colourings[k], a);
+		}
+	}
+	for (int k = 0; k < BLOCKS; ++k) {
+		plait_free(a, orders[k]);
+	}
+	plait_free(a, scratch);
+	return ok;
+}

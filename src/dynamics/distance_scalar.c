@@ -1,0 +1,81 @@
+#include "dynamics/distance_kernel.h"
+
+#include <math.h>
+
+/* The reference arithmetic: the vector kernels repeat these operations lane by lane, in this
+ * order, so the three give the same bits. */
+void plait_project_distance_scalar(plait_distance_block *block, plait_point *points, int begin, int end,
+                                   float inverse_h_squared)
+{
+	const int(*pair)[2] = (const int(*)[2])block->pair;
+	const float *rest = block->rest, *tension = block->compliance_tension;
+	const float *compression = block->compliance_compression;
+	float *lambda = block->lambda;
+	for (int c = begin; c < end; ++c) {
+		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
+		float wi = pi->w, wj = pj->w;
+		float dx = pj->x.x - pi->x.x, dy = pj->x.y - pi->x.y, dz = pj->x.z - pi->x.z;
+		float length = sqrtf(dx * dx + dy * dy + dz * dz);
+		length = length > 1e-12f ? length : 1e-12f;
+		float C = length - rest[c];
+		float alpha = C > 0.0f ? tension[c] : compression[c];
+		float w_sum = wi + wj;
+		bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
+		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
+		float denominator = (w_sum + alpha_tilde) * length;
+		denominator = w_sum > 0.0f ? denominator : 1.0f;
+		float s = (-C - alpha_tilde * lambda[c]) / denominator;
+		s = active ? s : 0.0f;
+		lambda[c] = lambda[c] + s * length;
+		float si = wi * s, sj = wj * s;
+		pi->x.x = pi->x.x - si * dx;
+		pi->x.y = pi->x.y - si * dy;
+		pi->x.z = pi->x.z - si * dz;
+		pj->x.x = pj->x.x + sj * dx;
+		pj->x.y = pj->x.y + sj * dy;
+		pj->x.z = pj->x.z + sj * dz;
+	}
+}
+
+#if PLAIT_X86_KERNELS
+bool plait_simd_supported(plait_simd level)
+{
+	switch (level) {
+	case PLAIT_SIMD_AUTO:
+	case PLAIT_SIMD_SCALAR:
+		return true;
+	case PLAIT_SIMD_AVX2:
+		return __builtin_cpu_supports("avx2");
+	case PLAIT_SIMD_AVX512:
+		return __builtin_cpu_supports("avx512f");
+	}
+	return false;
+}
+#else
+bool plait_simd_supported(plait_simd level)
+{
+	return level == PLAIT_SIMD_AUTO || level == PLAIT_SIMD_SCALAR;
+}
+#endif
+
+plait_simd plait_simd_best(void)
+{
+	if (plait_simd_supported(PLAIT_SIMD_AVX512)) {
+		return PLAIT_SIMD_AVX512;
+	}
+	return plait_simd_supported(PLAIT_SIMD_AVX2) ? PLAIT_SIMD_AVX2 : PLAIT_SIMD_SCALAR;
+}
+
+plait_distance_kernel *plait_distance_kernel_for(plait_simd level)
+{
+	switch (level) {
+#if PLAIT_X86_KERNELS
+	case PLAIT_SIMD_AVX2:
+		return plait_project_distance_avx2;
+	case PLAIT_SIMD_AVX512:
+		return plait_project_distance_avx512;
+#endif
+	default:
+		return plait_project_distance_scalar;
+	}
+}
