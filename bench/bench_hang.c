@@ -4,33 +4,54 @@
  * vertices at z = -1, x = +-1 pinned; 1 kg per free vertex; gravity (0, -9.81, 0); a static
  * sphere of radius 0.5 at (0, -0.75, 0); 60 frames per second; 300 frames. Structural, shear
  * (both quad diagonals) and bend constraints, the default substeps (3) and collision
- * iterations (4). Two materials:
+ * iterations (4). Three materials:
  *   default  the default cloth resistances (stretch 20, compression 10, shear 10, bend 0.1),
  *            whose iteration counts follow from them (20 stretch, 10 shear, 3 bend per frame);
  *   rigid    stretch and compression at 10000 (zero compliance) with --iterations (20)
  *            stretch iterations per frame; shear and bend at their defaults (10 shear and 3
- *            bend iterations per frame).
+ *            bend iterations per frame);
+ *   stiff    the constraint set of the cross-solver comparison (issue 4): structural edges,
+ *            both quad diagonals and skip-one edges (bend as distances), all rigid, each kind
+ *            --iterations times per frame (or once per substep when fewer): 97,026 constraints
+ *            at N = 128.
  *
  * Prints one line per run: scene, material, threads, ms/frame (median of the runs), the strain
  * |length / rest - 1| of the structural edges at the last frame (max, p99, mean), and bytes of
  * library memory per vertex.
  *
- * usage: bench_hang [N ...] [--material default|rigid|both] [--tethers none|euclidean|geodesic]
- *                   [--runs R] [--frames F] [--iterations I] [--substeps S]
+ * --threads LIST (e.g. 1,2,4; default 1) runs every size with each thread count: K > 1 attaches
+ * a pool of K workers (tools/plait/thread_pool.h, the calling thread included) to the world's
+ * task hooks. It needs the tool layer (plait_toollib); without it only 1 is accepted.
+ *
+ * usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers none|euclidean|geodesic]
+ *                   [--runs R] [--frames F] [--iterations I] [--substeps S] [--threads LIST]
+ *                   [--simd auto|scalar|avx2|avx512]
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <time.h>
 
 #include <plait/plait.h>
 
+#ifdef PLAIT_BENCH_HAVE_POOL
+#include "thread_pool.h"
+#else
+typedef struct plait_thread_pool plait_thread_pool;
+#endif
+
+#define HANG_MAX_THREADS 256
+#define HANG_MAX_THREAD_COUNTS 16
+
 typedef struct hang_options {
 	int frames, runs, iterations, substeps;
-	bool rigid;
+	int material; /* 0 default, 1 rigid, 2 stiff */
+	plait_simd simd;
 	plait_tether_mode tethers;
+	plait_thread_pool *pool; /* NULL: one thread */
 } hang_options;
 
 static double now_seconds(void)
@@ -53,7 +74,8 @@ typedef struct hang_result {
 	int nonfinite;
 } hang_result;
 
-static size_t allocated_bytes;
+/* Atomic in case the library allocates from its worker threads. */
+static atomic_size_t allocated_bytes;
 
 static void *counting_alloc(size_t size, size_t alignment, void *context)
 {
@@ -109,11 +131,15 @@ static hang_result run_hang(int n, const hang_options *options)
 	plait_world_def world_def = plait_default_world_def();
 	world_def.fps = 60.0f;
 	world_def.air_density = 0.0f;
+	world_def.simd = options->simd;
 	world_def.alloc = counting_alloc;
 	world_def.free = counting_free;
 	if (options->substeps > 0) {
 		world_def.substeps = options->substeps;
 	}
+#ifdef PLAIT_BENCH_HAVE_POOL
+	plait_thread_pool_attach(options->pool, &world_def);
+#endif
 	plait_error error;
 	allocated_bytes = 0;
 	plait_world_id world = plait_create_world(&world_def, &error);
@@ -121,17 +147,22 @@ static hang_result run_hang(int n, const hang_options *options)
 	cloth.name = "hang";
 	cloth.mesh = (plait_mesh_def){positions, vertex_count, face_sizes, faces, face_indices};
 	cloth.vertex_masses = masses;
-	if (options->rigid) {
+	if (options->material == 1) {
 		cloth.stretch_resistance = 10000.0f;
 		cloth.compression_resistance = 10000.0f;
 		cloth.iterations = options->iterations;
+	} else if (options->material == 2) {
+		cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+		cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
+		cloth.bend_model = PLAIT_BEND_DISTANCE;
+		cloth.iterations = cloth.shear_iterations = cloth.bend_iterations = options->iterations;
 	}
 	cloth.surface.thickness = 0.0f;
 	cloth.tethers = options->tethers;
 	cloth.pins = pins;
 	cloth.pin_count = 2;
 	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
-	if (plait_object_id_is_null(cloth_id)) {
+	if (plait_object_id_is_null(cloth_id) || plait_world_id_is_null(world)) {
 		fprintf(stderr, "bench_hang: %s\n", error.message);
 		exit(1);
 	}
@@ -192,11 +223,31 @@ static hang_result run_hang(int n, const hang_options *options)
 	return result;
 }
 
+// Parses a comma list of thread counts ("1,2,4") into counts; returns how many, 0 if malformed.
+static int parse_thread_list(const char *text, int *counts, int capacity)
+{
+	int n = 0;
+	const char *p = text;
+	for (;;) {
+		char *end;
+		long k = strtol(p, &end, 10);
+		if (end == p || k < 1 || k > HANG_MAX_THREADS || n == capacity || (*end != ',' && *end != '\0')) {
+			return 0;
+		}
+		counts[n++] = (int)k;
+		if (*end == '\0') {
+			return n;
+		}
+		p = end + 1;
+	}
+}
+
 int main(int argc, char **argv)
 {
-	hang_options options = {300, 3, 20, 0, false, PLAIT_TETHER_NONE};
-	int materials = 2; /* bit 0: default, bit 1: rigid */
+	hang_options options = {300, 3, 20, 0, 0, PLAIT_SIMD_AUTO, PLAIT_TETHER_NONE, NULL};
+	int materials = 2; /* bit 0: default, bit 1: rigid, bit 2: stiff */
 	int sizes[16], size_count = 0;
+	int thread_counts[HANG_MAX_THREAD_COUNTS] = {1}, thread_count_count = 1;
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--runs") == 0 && a + 1 < argc) {
 			options.runs = atoi(argv[++a]);
@@ -206,7 +257,16 @@ int main(int argc, char **argv)
 			options.iterations = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--material") == 0 && a + 1 < argc) {
 			++a;
-			materials = strcmp(argv[a], "default") == 0 ? 1 : strcmp(argv[a], "both") == 0 ? 3 : 2;
+			materials = strcmp(argv[a], "default") == 0 ? 1
+			            : strcmp(argv[a], "both") == 0  ? 3
+			            : strcmp(argv[a], "stiff") == 0 ? 4
+			                                            : 2;
+		} else if (strcmp(argv[a], "--simd") == 0 && a + 1 < argc) {
+			++a;
+			options.simd = strcmp(argv[a], "scalar") == 0   ? PLAIT_SIMD_SCALAR
+			               : strcmp(argv[a], "avx2") == 0   ? PLAIT_SIMD_AVX2
+			               : strcmp(argv[a], "avx512") == 0 ? PLAIT_SIMD_AVX512
+			                                                : PLAIT_SIMD_AUTO;
 		} else if (strcmp(argv[a], "--tethers") == 0 && a + 1 < argc) {
 			++a;
 			options.tethers = strcmp(argv[a], "geodesic") == 0    ? PLAIT_TETHER_GEODESIC
@@ -214,12 +274,23 @@ int main(int argc, char **argv)
 			                                                      : PLAIT_TETHER_NONE;
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
 			options.substeps = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--threads") == 0 && a + 1 < argc) {
+			++a;
+			thread_count_count = parse_thread_list(argv[a], thread_counts, HANG_MAX_THREAD_COUNTS);
+			if (thread_count_count == 0) {
+				fprintf(stderr,
+				        "bench_hang: --threads expects a comma list of up to %d counts from 1 to %d, got "
+				        "'%s'\n",
+				        HANG_MAX_THREAD_COUNTS, HANG_MAX_THREADS, argv[a]);
+				return 2;
+			}
 		} else if (size_count < 16 && atoi(argv[a]) > 1) {
 			sizes[size_count++] = atoi(argv[a]);
 		} else {
 			fprintf(stderr,
-			        "usage: bench_hang [N ...] [--material default|rigid|both] [--tethers "
-			        "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S]\n");
+			        "usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers "
+			        "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S] "
+			        "[--threads LIST] [--simd auto|scalar|avx2|avx512]\n");
 			return 2;
 		}
 	}
@@ -231,28 +302,54 @@ int main(int argc, char **argv)
 		fprintf(stderr, "bench_hang: runs and frames must be >= 1\n");
 		return 2;
 	}
-	for (int m = 0; m < 2; ++m) {
+#ifndef PLAIT_BENCH_HAVE_POOL
+	for (int t = 0; t < thread_count_count; ++t) {
+		if (thread_counts[t] > 1) {
+			fprintf(stderr,
+			        "bench_hang: built without the tool layer (plait_toollib): --threads can only be 1\n");
+			return 2;
+		}
+	}
+#endif
+	for (int m = 0; m < 3; ++m) {
 		if (!(materials & (1 << m))) {
 			continue;
 		}
-		options.rigid = m == 1;
+		options.material = m;
 		for (int s = 0; s < size_count; ++s) {
-			double times[64];
-			hang_result last = {0};
-			int runs = options.runs > 64 ? 64 : options.runs;
-			for (int r = 0; r < runs; ++r) {
-				last = run_hang(sizes[s], &options);
-				times[r] = last.ms_per_frame;
+			for (int t = 0; t < thread_count_count; ++t) {
+				int threads = thread_counts[t];
+				options.pool = NULL;
+#ifdef PLAIT_BENCH_HAVE_POOL
+				if (threads > 1) {
+					options.pool = plait_thread_pool_create(threads);
+					if (options.pool == NULL) {
+						fprintf(stderr, "bench_hang: cannot start %d threads\n", threads - 1);
+						return 1;
+					}
+				}
+#endif
+				double times[64];
+				hang_result last = {0};
+				int runs = options.runs > 64 ? 64 : options.runs;
+				for (int r = 0; r < runs; ++r) {
+					last = run_hang(sizes[s], &options);
+					times[r] = last.ms_per_frame;
+				}
+#ifdef PLAIT_BENCH_HAVE_POOL
+				plait_thread_pool_destroy(options.pool);
+				options.pool = NULL;
+#endif
+				qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
+				const char *tether_names[3] = {"none", "euclidean", "geodesic"};
+				const char *material_names[3] = {"default", "rigid", "stiff"};
+				printf("scene=hang-%d material=%s tethers=%s threads=%d frames=%d ms_per_frame=%.3f "
+				       "strain_max=%.4f strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
+				       sizes[s], material_names[options.material], tether_names[options.tethers], threads,
+				       options.frames, times[runs / 2], last.strain_max, last.strain_p99, last.strain_mean,
+				       last.bytes_per_vertex, last.nonfinite);
+				fflush(stdout);
 			}
-			qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
-			const char *tether_names[3] = {"none", "euclidean", "geodesic"};
-			printf(
-			    "scene=hang-%d material=%s tethers=%s threads=1 frames=%d ms_per_frame=%.3f strain_max=%.4f "
-			    "strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
-			    sizes[s], options.rigid ? "rigid" : "default", tether_names[options.tethers], options.frames,
-			    times[runs / 2], last.strain_max, last.strain_p99, last.strain_mean, last.bytes_per_vertex,
-			    last.nonfinite);
-			fflush(stdout);
 		}
 	}
 	return 0;

@@ -236,6 +236,8 @@ typedef struct plait_cloth_def {
 	float damp;                   /* velocity damping rate, 1/s, 0..100 (0) */
 	int iterations;               /* stretch iterations per frame; 0 = from the stretch and compression
 	                               * resistances (0). Lets a stiff material run with few iterations. */
+	int shear_iterations;         /* as iterations, for shear (0: from shear_resistance) */
+	int bend_iterations;          /* as iterations, for bend (0: from bend_resistance) */
 	plait_tether_mode tethers;    /* (PLAIT_TETHER_NONE); built from the pins given here */
 	bool self_collide;      /* its vertices collide with its own triangles (false); pairs closer than the
 	                         * thickness in the rest shape keep their rest separation instead */

@@ -1,6 +1,6 @@
 /* The distance kernel in AVX-512, 16 constraints at a time (AVX-512F only). Compiled with
  * -mavx512f (and never with FMA contraction); only called when the processor has AVX-512F. The
- * remainder of a range goes to the AVX2 kernel, which every AVX-512 processor also runs. */
+ * remainder of a range is one masked batch. */
 #include "dynamics/distance_kernel.h"
 
 #if PLAIT_X86_KERNELS
@@ -14,15 +14,15 @@ static inline __m128 load_point(const plait_point *points, int index)
 /* Loads the points of one side of 16 constraints and transposes them into a register per
  * coordinate, lane k holding constraint k: register r_m gets points m, m + 4, m + 8 and m + 12
  * in its four 128-bit blocks, and a 4x4 transpose inside each block finishes the job. */
-static inline void gather16(const plait_point *points, const int (*pair)[2], int side, __m512 *x, __m512 *y,
-                            __m512 *z, __m512 *w)
+static inline void gather16(const plait_point *points, const int *index, __m512 *x, __m512 *y, __m512 *z,
+                            __m512 *w)
 {
 	__m512 r[4];
 	for (int m = 0; m < 4; ++m) {
-		__m512 v = _mm512_castps128_ps512(load_point(points, pair[m][side]));
-		v = _mm512_insertf32x4(v, load_point(points, pair[m + 4][side]), 1);
-		v = _mm512_insertf32x4(v, load_point(points, pair[m + 8][side]), 2);
-		r[m] = _mm512_insertf32x4(v, load_point(points, pair[m + 12][side]), 3);
+		__m512 v = _mm512_castps128_ps512(load_point(points, index[m]));
+		v = _mm512_insertf32x4(v, load_point(points, index[m + 4]), 1);
+		v = _mm512_insertf32x4(v, load_point(points, index[m + 8]), 2);
+		r[m] = _mm512_insertf32x4(v, load_point(points, index[m + 12]), 3);
 	}
 	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]);
 	__m512 t1 = _mm512_unpacklo_ps(r[2], r[3]);
@@ -34,8 +34,10 @@ static inline void gather16(const plait_point *points, const int (*pair)[2], int
 	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 
-static inline void scatter16(plait_point *points, const int (*pair)[2], int side, __m512 x, __m512 y,
-                             __m512 z, __m512 w)
+/* The inverse of gather16, storing the first `count` lanes only (lanes past a range's end
+ * repeat lane 0's points, which must not be written back over it). */
+static inline void scatter16(plait_point *points, const int *index, int count, __m512 x, __m512 y, __m512 z,
+                             __m512 w)
 {
 	__m512 t0 = _mm512_unpacklo_ps(x, y);
 	__m512 t1 = _mm512_unpacklo_ps(z, w);
@@ -45,55 +47,86 @@ static inline void scatter16(plait_point *points, const int (*pair)[2], int side
 	               _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
 	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)),
 	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
-	for (int m = 0; m < 4; ++m) {
-		_mm_store_ps(&points[pair[m][side]].x.x, _mm512_castps512_ps128(r[m]));
-		_mm_store_ps(&points[pair[m + 4][side]].x.x, _mm512_extractf32x4_ps(r[m], 1));
-		_mm_store_ps(&points[pair[m + 8][side]].x.x, _mm512_extractf32x4_ps(r[m], 2));
-		_mm_store_ps(&points[pair[m + 12][side]].x.x, _mm512_extractf32x4_ps(r[m], 3));
+	if (count == 16) {
+		for (int m = 0; m < 4; ++m) {
+			_mm_store_ps(&points[index[m]].x.x, _mm512_castps512_ps128(r[m]));
+			_mm_store_ps(&points[index[m + 4]].x.x, _mm512_extractf32x4_ps(r[m], 1));
+			_mm_store_ps(&points[index[m + 8]].x.x, _mm512_extractf32x4_ps(r[m], 2));
+			_mm_store_ps(&points[index[m + 12]].x.x, _mm512_extractf32x4_ps(r[m], 3));
+		}
+		return;
 	}
+	_Alignas(64) plait_point lanes[16];
+	for (int m = 0; m < 4; ++m) {
+		_mm_store_ps(&lanes[m].x.x, _mm512_castps512_ps128(r[m]));
+		_mm_store_ps(&lanes[m + 4].x.x, _mm512_extractf32x4_ps(r[m], 1));
+		_mm_store_ps(&lanes[m + 8].x.x, _mm512_extractf32x4_ps(r[m], 2));
+		_mm_store_ps(&lanes[m + 12].x.x, _mm512_extractf32x4_ps(r[m], 3));
+	}
+	for (int k = 0; k < count; ++k) {
+		_mm_store_ps(&points[index[k]].x.x, _mm_load_ps(&lanes[k].x.x));
+	}
+}
+
+/* Projects constraints [c, c + count), count <= 16. Lanes past count compute on copies of
+ * lane 0, are masked out of the block's arrays and are not written back. */
+static inline void project16(plait_distance_block *block, plait_point *points, int c, int count, __m512 ih2)
+{
+	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
+	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
+	__mmask16 lanes = (__mmask16)((1u << count) - 1u);
+	/* Copied out: the compiler cannot tell that the stores to points leave them alone. */
+	const int(*pair)[2] = (const int(*)[2])block->pair + c;
+	int index_i[16], index_j[16];
+	for (int k = 0; k < 16; ++k) {
+		int lane = k < count ? k : 0;
+		index_i[k] = pair[lane][0];
+		index_j[k] = pair[lane][1];
+	}
+	__m512 xi, yi, zi, wi, xj, yj, zj, wj;
+	gather16(points, index_i, &xi, &yi, &zi, &wi);
+	gather16(points, index_j, &xj, &yj, &zj, &wj);
+	__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
+	__m512 length_sq =
+	    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+	__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), tiny);
+	__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
+	__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
+	__m512 alpha =
+	    _mm512_mask_blend_ps(stretched, _mm512_maskz_loadu_ps(lanes, block->compliance_compression + c),
+	                         _mm512_maskz_loadu_ps(lanes, block->compliance_tension + c));
+	__m512 w_sum = _mm512_add_ps(wi, wj);
+	__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
+	__mmask16 active = _mm512_mask_cmp_ps_mask(moving, alpha, zero, _CMP_GE_OQ);
+	__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
+	__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
+	denominator = _mm512_mask_blend_ps(moving, one, denominator);
+	__m512 lambda = _mm512_maskz_loadu_ps(lanes, block->lambda + c);
+	__m512 s = _mm512_div_ps(
+	    _mm512_sub_ps(_mm512_sub_ps(negative_zero, C), _mm512_mul_ps(alpha_tilde, lambda)), denominator);
+	s = _mm512_maskz_mov_ps(active, s);
+	_mm512_mask_storeu_ps(block->lambda + c, lanes, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
+	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
+	xi = _mm512_sub_ps(xi, _mm512_mul_ps(si, dx));
+	yi = _mm512_sub_ps(yi, _mm512_mul_ps(si, dy));
+	zi = _mm512_sub_ps(zi, _mm512_mul_ps(si, dz));
+	xj = _mm512_add_ps(xj, _mm512_mul_ps(sj, dx));
+	yj = _mm512_add_ps(yj, _mm512_mul_ps(sj, dy));
+	zj = _mm512_add_ps(zj, _mm512_mul_ps(sj, dz));
+	scatter16(points, index_i, count, xi, yi, zi, wi);
+	scatter16(points, index_j, count, xj, yj, zj, wj);
 }
 
 void plait_project_distance_avx512(plait_distance_block *block, plait_point *points, int begin, int end,
                                    float inverse_h_squared)
 {
-	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
-	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
 	const __m512 ih2 = _mm512_set1_ps(inverse_h_squared);
 	int c = begin;
 	for (; c + 16 <= end; c += 16) {
-		const int(*pair)[2] = (const int(*)[2])block->pair + c;
-		__m512 xi, yi, zi, wi, xj, yj, zj, wj;
-		gather16(points, pair, 0, &xi, &yi, &zi, &wi);
-		gather16(points, pair, 1, &xj, &yj, &zj, &wj);
-		__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
-		__m512 length_sq =
-		    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
-		__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), tiny);
-		__m512 C = _mm512_sub_ps(length, _mm512_loadu_ps(block->rest + c));
-		__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
-		__m512 alpha = _mm512_mask_blend_ps(stretched, _mm512_loadu_ps(block->compliance_compression + c),
-		                                    _mm512_loadu_ps(block->compliance_tension + c));
-		__m512 w_sum = _mm512_add_ps(wi, wj);
-		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
-		__mmask16 active = _mm512_mask_cmp_ps_mask(moving, alpha, zero, _CMP_GE_OQ);
-		__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
-		__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
-		denominator = _mm512_mask_blend_ps(moving, one, denominator);
-		__m512 lambda = _mm512_loadu_ps(block->lambda + c);
-		__m512 s = _mm512_div_ps(
-		    _mm512_sub_ps(_mm512_sub_ps(negative_zero, C), _mm512_mul_ps(alpha_tilde, lambda)), denominator);
-		s = _mm512_maskz_mov_ps(active, s);
-		_mm512_storeu_ps(block->lambda + c, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
-		__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
-		xi = _mm512_sub_ps(xi, _mm512_mul_ps(si, dx));
-		yi = _mm512_sub_ps(yi, _mm512_mul_ps(si, dy));
-		zi = _mm512_sub_ps(zi, _mm512_mul_ps(si, dz));
-		xj = _mm512_add_ps(xj, _mm512_mul_ps(sj, dx));
-		yj = _mm512_add_ps(yj, _mm512_mul_ps(sj, dy));
-		zj = _mm512_add_ps(zj, _mm512_mul_ps(sj, dz));
-		scatter16(points, pair, 0, xi, yi, zi, wi);
-		scatter16(points, pair, 1, xj, yj, zj, wj);
+		project16(block, points, c, 16, ih2);
 	}
-	plait_project_distance_avx2(block, points, c, end, inverse_h_squared);
+	if (c < end) {
+		project16(block, points, c, end - c, ih2);
+	}
 }
 #endif

@@ -198,6 +198,10 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	                     def->iterations) != PLAIT_OK ||
 	    check_range(error, label, "shear_resistance", def->shear_resistance, 0.0f, MAX_RESISTANCE) !=
 	        PLAIT_OK ||
+	    check_range(error, label, "shear_iterations", (float)def->shear_iterations, 0.0f,
+	                (float)PLAIT_MAX_IMPORTANCE) != PLAIT_OK ||
+	    check_range(error, label, "bend_iterations", (float)def->bend_iterations, 0.0f,
+	                (float)PLAIT_MAX_IMPORTANCE) != PLAIT_OK ||
 	    check_range(error, label, "tangential_drag", def->tangential_drag, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "lift", def->lift, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "tether_scale", def->tether_scale, 1.0f, 10.0f) != PLAIT_OK ||
@@ -485,8 +489,10 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	    override > 0
 	        ? override
 	        : resistance_importance(plait_maxf(def->stretch_resistance, def->compression_resistance));
-	object->importance[PLAIT_KIND_SHEAR] = resistance_importance(def->shear_resistance);
-	object->importance[PLAIT_KIND_BEND] = resistance_importance(def->bend_resistance);
+	object->importance[PLAIT_KIND_SHEAR] =
+	    def->shear_iterations > 0 ? def->shear_iterations : resistance_importance(def->shear_resistance);
+	object->importance[PLAIT_KIND_BEND] =
+	    def->bend_iterations > 0 ? def->bend_iterations : resistance_importance(def->bend_resistance);
 	object->importance[PLAIT_KIND_TETHER] = 1; /* cheap and decisive: once per substep */
 	plait_world_update_kinds(world);
 	return id;

@@ -23,6 +23,7 @@ typedef struct plait_run_options {
 	const plait_writer_format *format;
 	bool progress; /* a progress line on err, rewritten in place */
 	bool check;    /* count intersections every frame into stats.jsonl */
+	int threads;   /* workers for the solver, the calling thread included; <= 1: no thread pool */
 } plait_run_options;
 
 /* `plait run` once its arguments are parsed; returns an exit code. */

@@ -4,6 +4,7 @@
 #include "files.h"
 #include "scene.h"
 #include "stats_log.h"
+#include "thread_pool.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -12,7 +13,8 @@
 
 static void plait_run_usage(FILE *f)
 {
-	fprintf(f, "usage: plait run [SCENE.json] [--out DIR] [--frames N] [--format obj|pc2] [--check]\n");
+	fprintf(f, "usage: plait run [SCENE.json] [--out DIR] [--frames N] [--format obj|pc2] [--check]\n"
+	           "                 [--threads N]\n");
 }
 
 static void plait_run_help(FILE *f)
@@ -25,8 +27,12 @@ static void plait_run_help(FILE *f)
 	           "  --format FORMAT  obj: DIR/NAME.FRAME.obj per object and frame (default)\n"
 	           "                   pc2: DIR/NAME.pc2 point cache per object\n"
 	           "  --check          count, every frame, crossing cloth triangles (between cloths and\n"
-	           "                   within each) and vertices inside colliders, into stats.jsonl\n"
-	           "  -h, --help       this help\n\n"
+	           "                   within each) and vertices inside colliders, into stats.jsonl\n");
+	fprintf(f,
+	        "  --threads N      threads for the solver, this one included, 1 to %d (default: the\n"
+	        "                   number of online processors, here %d); results do not depend on it\n",
+	        PLAIT_THREAD_POOL_MAX_THREADS, plait_thread_pool_default_count());
+	fprintf(f, "  -h, --help       this help\n\n"
 	           "Exit status: 0 done, 1 scene error or failed simulation, 2 bad arguments.\n");
 }
 
@@ -58,7 +64,10 @@ static const char *plait_option_value(int argc, char **argv, int *i, const char 
 
 int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 {
-	plait_run_options options = {.out_dir = "out", .frames = -1, .format = &plait_writer_obj};
+	plait_run_options options = {.out_dir = "out",
+	                             .frames = -1,
+	                             .format = &plait_writer_obj,
+	                             .threads = plait_thread_pool_default_count()};
 	for (int i = 1; i < argc; ++i) {
 		const char *arg = argv[i];
 		bool missing = false;
@@ -85,6 +94,16 @@ int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 				return PLAIT_EXIT_USAGE;
 			}
 			options.frames = (int)frames;
+		} else if ((value = plait_option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
+			char *end;
+			long threads = strtol(value, &end, 10);
+			if (end == value || *end != '\0' || threads < 1 || threads > PLAIT_THREAD_POOL_MAX_THREADS) {
+				fprintf(err, "plait run: --threads expects a whole number from 1 to %d, got '%s'\n",
+				        PLAIT_THREAD_POOL_MAX_THREADS, value);
+				plait_run_usage(err);
+				return PLAIT_EXIT_USAGE;
+			}
+			options.threads = (int)threads;
 		} else if ((value = plait_option_value(argc, argv, &i, "--format", &missing)) != NULL) {
 			options.format = plait_writer_find_format(value);
 			if (options.format == NULL) {
@@ -154,11 +173,24 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 	if (options->scene_path == NULL)
 		fprintf(out, "plait: no scene given, running the built-in demo (cloth falling on a sphere)\n");
 
+	// The solver's threads: none beyond this one for 1. The pool outlives the world.
+	plait_thread_pool *pool = NULL;
+	if (options->threads > 1) {
+		pool = plait_thread_pool_create(options->threads);
+		if (pool == NULL) {
+			fprintf(err, "plait: cannot start %d threads\n", options->threads - 1);
+			plait_scene_free(&scene);
+			return PLAIT_EXIT_FAILURE;
+		}
+	}
+	plait_thread_pool_attach(pool, &scene.world);
+
 	// Validate everything the solver checks before a single file exists.
 	plait_world_id world;
 	if (!plait_scene_create_world(&scene, &world, &error)) {
 		fprintf(err, "%s\n", error.message);
 		plait_scene_free(&scene);
+		plait_thread_pool_destroy(pool);
 		return PLAIT_EXIT_FAILURE;
 	}
 	plait_run_outputs outputs = {0};
@@ -168,6 +200,7 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 		fprintf(err, "plait: %s\n", error.message);
 		plait_destroy_world(world);
 		plait_scene_free(&scene);
+		plait_thread_pool_destroy(pool);
 		return PLAIT_EXIT_FAILURE;
 	}
 	outputs.writer = plait_writer_open(options->format, options->out_dir, world, &error);
@@ -176,6 +209,7 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 		plait_atomic_abort(&outputs.stats.file);
 		plait_destroy_world(world);
 		plait_scene_free(&scene);
+		plait_thread_pool_destroy(pool);
 		return PLAIT_EXIT_FAILURE;
 	}
 
@@ -232,5 +266,6 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 	}
 	plait_destroy_world(world);
 	plait_scene_free(&scene);
+	plait_thread_pool_destroy(pool);
 	return status;
 }

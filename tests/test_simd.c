@@ -1,0 +1,255 @@
+/* The solver core's promises about how it runs: the portable, AVX2 and AVX-512 kernels give
+ * the same bits; the sweep order (regions and coloured runs) never puts two constraints that
+ * share a particle where they could run at once; and a whole simulation is byte-identical
+ * whichever instruction set runs it. */
+#include <criterion/criterion.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dynamics/colouring.h"
+#include "dynamics/distance_kernel.h"
+#include "test_support.h"
+
+static const plait_simd levels[] = {PLAIT_SIMD_SCALAR, PLAIT_SIMD_AVX2, PLAIT_SIMD_AVX512};
+
+static uint32_t next_random(uint32_t *state)
+{
+	*state = *state * 1664525u + 1013904223u;
+	return *state >> 8;
+}
+
+static float random_unit(uint32_t *state)
+{
+	return (float)next_random(state) / 16777216.0f;
+}
+
+/* A block of independent constraints (disjoint pairs) of every kind the kernel branches on:
+ * stretched and compressed, soft and rigid, one-sided (no resistance one way), pinned ends,
+ * both ends pinned, coincident points. Counts that are not multiples of 8 or 16 exercise the
+ * masked and scalar remainders. */
+static void make_block(plait_distance_block *block, plait_point *points, int count, uint32_t seed)
+{
+	uint32_t state = seed;
+	block->count = block->capacity = count;
+	block->pair = malloc(sizeof *block->pair * (size_t)count);
+	block->rest = malloc(sizeof(float) * (size_t)count);
+	block->compliance_tension = malloc(sizeof(float) * (size_t)count);
+	block->compliance_compression = malloc(sizeof(float) * (size_t)count);
+	block->lambda = malloc(sizeof(float) * (size_t)count);
+	for (int c = 0; c < count; ++c) {
+		block->pair[c][0] = 2 * c + 1;
+		block->pair[c][1] = 2 * c;
+		block->rest[c] = 0.01f + random_unit(&state);
+		float alphas[4] = {0.0f, 1e-6f, 1e-3f, PLAIT_NO_RESISTANCE};
+		block->compliance_tension[c] = alphas[next_random(&state) % 4];
+		block->compliance_compression[c] = alphas[next_random(&state) % 4];
+		block->lambda[c] = random_unit(&state) - 0.5f;
+	}
+	for (int i = 0; i < 2 * count; ++i) {
+		points[i].x =
+		    (plait_vec3){random_unit(&state), random_unit(&state) - 0.5f, 2.0f * random_unit(&state)};
+		uint32_t kind = next_random(&state) % 8;
+		points[i].w = kind == 0 ? 0.0f : 0.5f + random_unit(&state);
+	}
+	points[6].x = points[7].x; /* a zero-length constraint */
+	points[8].w = points[9].w = 0.0f;
+}
+
+static void free_block(plait_distance_block *block)
+{
+	free(block->pair);
+	free(block->rest);
+	free(block->compliance_tension);
+	free(block->compliance_compression);
+	free(block->lambda);
+}
+
+Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
+{
+	int counts[] = {1, 7, 8, 15, 16, 17, 33, 1000};
+	for (size_t n = 0; n < sizeof counts / sizeof counts[0]; ++n) {
+		int count = counts[n];
+		plait_point *reference = malloc(sizeof *reference * (size_t)(2 * count));
+		float *reference_lambda = malloc(sizeof(float) * (size_t)count);
+		for (int l = 0; l < 3; ++l) {
+			if (!plait_simd_supported(levels[l])) {
+				cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
+				continue;
+			}
+			plait_distance_block block;
+			memset(&block, 0, sizeof block);
+			plait_point *points = aligned_alloc(64, sizeof *points * (size_t)(2 * count + 16));
+			make_block(&block, points, count, 12345u + (uint32_t)count);
+			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
+			for (int sweep = 0; sweep < 5; ++sweep) {
+				kernel(&block, points, 0, count, 3600.0f);
+			}
+			for (int i = 0; i < 2 * count; ++i) {
+				cr_assert(isfinite(points[i].x.x) && isfinite(points[i].x.y) && isfinite(points[i].x.z));
+			}
+			if (l == 0) {
+				memcpy(reference, points, sizeof *reference * (size_t)(2 * count));
+				memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
+			} else {
+				cr_assert(memcmp(reference, points, sizeof *reference * (size_t)(2 * count)) == 0,
+				          "level %d differs from the portable kernel at %d constraints", (int)levels[l],
+				          count);
+				cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
+				          "level %d multipliers differ at %d constraints", (int)levels[l], count);
+			}
+			free_block(&block);
+			free(points);
+		}
+		free(reference);
+		free(reference_lambda);
+	}
+}
+
+/* Every run holds constraints that share no particle, regions share no particle, and the order
+ * is a permutation. */
+static void check_colouring(const int *vertices, int arity, int count, int particle_count)
+{
+	plait_allocator allocator = {NULL, NULL, NULL};
+	int *order = malloc(sizeof(int) * (size_t)count);
+	plait_colouring colouring;
+	cr_assert(
+	    plait_colour_constraints(&allocator, vertices, arity, count, particle_count, order, &colouring));
+	cr_assert_eq(plait_colouring_end(&colouring), count);
+	int *seen = calloc((size_t)count, sizeof(int));
+	for (int k = 0; k < count; ++k) {
+		cr_assert(order[k] >= 0 && order[k] < count && seen[order[k]] == 0);
+		seen[order[k]] = 1;
+	}
+	int *stamp = malloc(sizeof(int) * (size_t)particle_count);
+	int *owner = malloc(sizeof(int) * (size_t)particle_count);
+	for (int i = 0; i < particle_count; ++i) {
+		stamp[i] = -1;
+		owner[i] = -1;
+	}
+	for (int run = 0; run < colouring.run_count; ++run) {
+		for (int k = colouring.run_start[run]; k < colouring.run_start[run + 1]; ++k) {
+			const int *tuple = vertices + (size_t)order[k] * (size_t)arity;
+			for (int a = 0; a < arity; ++a) {
+				cr_assert_neq(stamp[tuple[a]], run, "run %d uses particle %d twice", run, tuple[a]);
+				stamp[tuple[a]] = run;
+			}
+		}
+	}
+	for (int r = 0; r < colouring.region_count; ++r) {
+		for (int run = colouring.region_start[r]; run < colouring.region_start[r + 1]; ++run) {
+			for (int k = colouring.run_start[run]; k < colouring.run_start[run + 1]; ++k) {
+				const int *tuple = vertices + (size_t)order[k] * (size_t)arity;
+				for (int a = 0; a < arity; ++a) {
+					cr_assert(owner[tuple[a]] == -1 || owner[tuple[a]] == r,
+					          "regions %d and %d share particle %d", owner[tuple[a]], r, tuple[a]);
+					owner[tuple[a]] = r;
+				}
+			}
+		}
+	}
+	plait_colouring_clear(&colouring, &allocator);
+	free(order);
+	free(seen);
+	free(stamp);
+	free(owner);
+}
+
+Test(simd, runs_and_regions_share_no_particle)
+{
+	/* A grid's edges, diagonals and skip-one pairs, and random pairs with a hub vertex that
+	 * takes part in more constraints than there are colours. */
+	int n = 60, count = 0;
+	int(*pairs)[2] = malloc(sizeof *pairs * (size_t)(8 * n * n + 200));
+	for (int j = 0; j < n; ++j) {
+		for (int i = 0; i < n; ++i) {
+			int a = j * n + i;
+			int neighbours[6][2] = {{i + 1, j}, {i, j + 1}, {i + 1, j + 1},
+			                        {i + 2, j}, {i, j + 2}, {i - 1, j + 1}};
+			for (int k = 0; k < 6; ++k) {
+				int u = neighbours[k][0], v = neighbours[k][1];
+				if (u >= 0 && u < n && v < n) {
+					pairs[count][0] = a;
+					pairs[count][1] = v * n + u;
+					++count;
+				}
+			}
+		}
+	}
+	for (int k = 0; k < 150; ++k) {
+		pairs[count][0] = 7;
+		pairs[count][1] = (k * 37) % (n * n) == 7 ? 8 : (k * 37) % (n * n);
+		++count;
+	}
+	check_colouring(&pairs[0][0], 2, count, n * n);
+	free(pairs);
+}
+
+/* A cloth with everything on (tethers, bend as distances, self-collision, a collider), stepped
+ * with each instruction set: identical positions, byte for byte. */
+Test(simd, a_simulation_is_byte_identical_with_every_instruction_set)
+{
+	test_grid grid = test_grid_make(40, 40, 2.0f, 2.0f);
+	plait_vec3 *reference = malloc(sizeof *reference * (size_t)grid.vertex_count);
+	plait_vec3 *positions = malloc(sizeof *positions * (size_t)grid.vertex_count);
+	for (int l = 0; l < 3; ++l) {
+		if (!plait_simd_is_supported(levels[l])) {
+			continue;
+		}
+		plait_world_def wdef = plait_default_world_def();
+		wdef.simd = levels[l];
+		wdef.fps = 60.0f;
+		plait_world_id world = plait_create_world(&wdef, NULL);
+		cr_assert_eq(plait_world_get_simd(world), levels[l]);
+		plait_cloth_def def = plait_default_cloth_def();
+		def.mesh = test_grid_mesh(&grid);
+		def.stretch_resistance = def.compression_resistance = 10000.0f;
+		def.bend_model = PLAIT_BEND_DISTANCE;
+		def.iterations = 12;
+		def.self_collide = true;
+		def.tethers = PLAIT_TETHER_EUCLIDEAN;
+		int pins[2] = {0, 40};
+		def.pins = pins;
+		def.pin_count = 2;
+		plait_object_id cloth = plait_create_cloth(world, &def, NULL);
+		cr_assert(!plait_object_id_is_null(cloth));
+		plait_collider_def sphere = plait_default_collider_def();
+		sphere.shape = PLAIT_SHAPE_SPHERE;
+		sphere.center = (plait_vec3){0.2f, -0.8f, 0.1f};
+		sphere.radius = 0.5f;
+		plait_create_collider(world, &sphere, NULL);
+		cr_assert(test_step_frames(world, 40));
+		plait_object_get_positions(cloth, 0, grid.vertex_count, positions, NULL);
+		if (l == 0) {
+			memcpy(reference, positions, sizeof *reference * (size_t)grid.vertex_count);
+		} else {
+			cr_assert(memcmp(reference, positions, sizeof *reference * (size_t)grid.vertex_count) == 0,
+			          "simd level %d gave other positions than the portable kernel", (int)levels[l]);
+		}
+		plait_destroy_world(world);
+	}
+	free(reference);
+	free(positions);
+	test_grid_free(&grid);
+}
+
+Test(simd, asking_for_a_level_the_processor_lacks_is_an_error)
+{
+	for (int l = 0; l < 3; ++l) {
+		plait_world_def wdef = plait_default_world_def();
+		wdef.simd = levels[l];
+		plait_error error;
+		plait_world_id world = plait_create_world(&wdef, &error);
+		if (plait_simd_is_supported(levels[l])) {
+			cr_assert(!plait_world_id_is_null(world));
+			plait_destroy_world(world);
+		} else {
+			cr_assert(plait_world_id_is_null(world));
+			cr_assert(strstr(error.message, "does not run it") != NULL, "%s", error.message);
+		}
+	}
+	plait_world_def wdef = plait_default_world_def();
+	wdef.simd = (plait_simd)42;
+	plait_error error;
+	cr_assert(plait_world_id_is_null(plait_create_world(&wdef, &error)));
+	cr_assert(strstr(error.message, "simd") != NULL);
+}

@@ -1,0 +1,484 @@
+/* The tool's thread pool (tools/plait/thread_pool.h) behind the world's task hooks: every item
+ * of an enqueue runs exactly once; tasks that spin-wait for each other (the solver's pattern)
+ * all run at once; results do not depend on the worker count; `plait run --threads`; and the
+ * hang-128 example scene loads. */
+#include "cli.h"
+#include "scene.h"
+#include "test_support.h"
+#include "thread_pool.h"
+
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <math.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* ---- Every item exactly once ---------------------------------------------------------------- */
+
+#define MAX_ITEMS 1000
+
+typedef struct count_context {
+	atomic_int hits[MAX_ITEMS];
+	atomic_int ranges;
+	atomic_int smallest_range;
+	atomic_int bad_worker; /* worker_index out of range */
+	atomic_int on_caller;  /* ranges run on the calling thread */
+	atomic_int bad_range;  /* start/end outside [0, item_count) or empty */
+	pthread_t caller;
+	int thread_count;
+	int item_count;
+} count_context;
+
+static void count_task(int start, int end, int worker_index, void *task_context)
+{
+	count_context *c = task_context;
+	if (start < 0 || end > c->item_count || start >= end)
+		atomic_fetch_add(&c->bad_range, 1);
+	int expected_low = c->thread_count > 1 ? 1 : 0;
+	int expected_high = c->thread_count > 1 ? c->thread_count - 1 : 0;
+	if (worker_index < expected_low || worker_index > expected_high)
+		atomic_fetch_add(&c->bad_worker, 1);
+	if (pthread_equal(pthread_self(), c->caller))
+		atomic_fetch_add(&c->on_caller, 1);
+	atomic_fetch_add(&c->ranges, 1);
+	int size = end - start, smallest = atomic_load(&c->smallest_range);
+	while (size < smallest && !atomic_compare_exchange_weak(&c->smallest_range, &smallest, size)) {
+	}
+	for (int i = start; i < end && i >= 0 && i < MAX_ITEMS; ++i)
+		atomic_fetch_add(&c->hits[i], 1);
+}
+
+static void count_context_init(count_context *c, int thread_count, int item_count)
+{
+	memset(c, 0, sizeof *c);
+	for (int i = 0; i < MAX_ITEMS; ++i)
+		atomic_init(&c->hits[i], 0);
+	atomic_init(&c->ranges, 0);
+	atomic_init(&c->smallest_range, MAX_ITEMS + 1);
+	atomic_init(&c->bad_worker, 0);
+	atomic_init(&c->on_caller, 0);
+	atomic_init(&c->bad_range, 0);
+	c->caller = pthread_self();
+	c->thread_count = thread_count;
+	c->item_count = item_count;
+}
+
+static void check_every_item_once(int thread_count, int item_count, int min_range)
+{
+	plait_thread_pool *pool = plait_thread_pool_create(thread_count);
+	cr_assert_not_null(pool);
+	cr_expect_eq(plait_thread_pool_worker_count(pool), thread_count);
+	count_context *c = malloc(sizeof *c);
+	for (int repeat = 0; repeat < 20; ++repeat) {
+		count_context_init(c, thread_count, item_count);
+		void *handle = plait_thread_pool_enqueue(count_task, item_count, min_range, c, pool);
+		if (thread_count == 1)
+			cr_expect_null(handle, "a pool without threads runs the task inline and returns NULL");
+		plait_thread_pool_finish(handle, pool);
+		for (int i = 0; i < item_count; ++i)
+			cr_assert_eq(atomic_load(&c->hits[i]), 1, "threads %d, items %d: item %d ran %d times",
+			             thread_count, item_count, i, atomic_load(&c->hits[i]));
+		for (int i = item_count; i < MAX_ITEMS; ++i)
+			cr_assert_eq(atomic_load(&c->hits[i]), 0);
+		cr_expect_eq(atomic_load(&c->bad_range), 0);
+		cr_expect_eq(atomic_load(&c->bad_worker), 0, "threads %d: worker_index out of range", thread_count);
+		int ranges = atomic_load(&c->ranges);
+		if (thread_count > 1) {
+			cr_expect_eq(atomic_load(&c->on_caller), 0, "threads %d: a range ran on the calling thread",
+			             thread_count);
+			cr_expect(ranges <= thread_count - 1, "threads %d: %d ranges", thread_count, ranges);
+			if (item_count >= min_range)
+				cr_expect(atomic_load(&c->smallest_range) >= min_range, "threads %d: a range of %d < %d",
+				          thread_count, atomic_load(&c->smallest_range), min_range);
+		} else {
+			cr_expect_eq(ranges, 1);
+		}
+	}
+	free(c);
+	plait_thread_pool_destroy(pool);
+}
+
+Test(threads, every_item_runs_once_single_item)
+{
+	check_every_item_once(1, 1, 1);
+	check_every_item_once(2, 1, 1);
+	check_every_item_once(8, 1, 1);
+}
+
+Test(threads, every_item_runs_once_1000_items_min_range_7)
+{
+	check_every_item_once(1, 1000, 7);
+	check_every_item_once(2, 1000, 7);
+	check_every_item_once(8, 1000, 7);
+	check_every_item_once(3, 10, 7); /* fewer items than min_range per thread: one range */
+}
+
+// More enqueues in flight than the pool has slots: enqueue blocks until one completes.
+Test(threads, more_enqueues_than_slots)
+{
+	enum { enqueues = 3 * PLAIT_THREAD_POOL_SLOTS + 5 };
+	plait_thread_pool *pool = plait_thread_pool_create(3);
+	cr_assert_not_null(pool);
+	count_context *contexts = malloc(sizeof *contexts * enqueues);
+	void *handles[enqueues];
+	for (int e = 0; e < enqueues; ++e) {
+		count_context_init(&contexts[e], 3, 50);
+		handles[e] = plait_thread_pool_enqueue(count_task, 50, 4, &contexts[e], pool);
+		cr_assert_not_null(handles[e]);
+	}
+	for (int e = enqueues - 1; e >= 0; --e) /* in any order */
+		plait_thread_pool_finish(handles[e], pool);
+	for (int e = 0; e < enqueues; ++e)
+		for (int i = 0; i < 50; ++i)
+			cr_assert_eq(atomic_load(&contexts[e].hits[i]), 1, "enqueue %d item %d", e, i);
+	free(contexts);
+	plait_thread_pool_destroy(pool);
+}
+
+Test(threads, create_attach_and_counts)
+{
+	cr_expect_null(plait_thread_pool_create(0));
+	cr_expect_null(plait_thread_pool_create(PLAIT_THREAD_POOL_MAX_THREADS + 1));
+	int cpus = plait_thread_pool_default_count();
+	cr_expect(cpus >= 1 && cpus <= PLAIT_THREAD_POOL_MAX_THREADS, "default count %d", cpus);
+
+	plait_world_def def = plait_default_world_def();
+	plait_thread_pool *one = plait_thread_pool_create(1);
+	cr_assert_not_null(one);
+	plait_thread_pool_attach(one, &def);
+	cr_expect_null(def.enqueue_task);
+	cr_expect_null(def.finish_task);
+	cr_expect_eq(def.worker_count, 1);
+	plait_thread_pool_destroy(one);
+
+	plait_thread_pool *four = plait_thread_pool_create(4);
+	cr_assert_not_null(four);
+	plait_thread_pool_attach(four, &def);
+	cr_expect(def.enqueue_task == plait_thread_pool_enqueue);
+	cr_expect(def.finish_task == plait_thread_pool_finish);
+	cr_expect(def.task_context == four);
+	cr_expect_eq(def.worker_count, 4);
+	plait_thread_pool_attach(NULL, &def);
+	cr_expect_null(def.enqueue_task);
+	cr_expect_eq(def.worker_count, 1);
+	plait_thread_pool_destroy(four);
+	plait_thread_pool_destroy(NULL);
+}
+
+/* ---- The solver's pattern: one task per worker, all spinning until all have started ---------- */
+
+typedef struct barrier_context {
+	atomic_int started;
+	atomic_uint_least64_t workers_seen; /* bit per worker_index */
+	int worker_count;
+} barrier_context;
+
+static void spin_until_all_started(barrier_context *b)
+{
+	atomic_fetch_add(&b->started, 1);
+	while (atomic_load(&b->started) < b->worker_count)
+		sched_yield(); /* 8 workers on 2 cores: let the others in */
+}
+
+static void barrier_task(int start, int end, int worker_index, void *task_context)
+{
+	barrier_context *b = task_context;
+	atomic_fetch_or(&b->workers_seen, (uint_least64_t)1 << worker_index);
+	spin_until_all_started(b);
+}
+
+static void check_spinning_workers(int worker_count, int frames)
+{
+	plait_thread_pool *pool = plait_thread_pool_create(worker_count);
+	cr_assert_not_null(pool);
+	plait_world_def def = plait_default_world_def();
+	plait_thread_pool_attach(pool, &def);
+	cr_assert_eq(def.worker_count, worker_count);
+	void *handles[8];
+	for (int frame = 0; frame < frames; ++frame) {
+		barrier_context b;
+		atomic_init(&b.started, 0);
+		atomic_init(&b.workers_seen, 0);
+		b.worker_count = def.worker_count;
+		for (int w = 1; w < def.worker_count; ++w) {
+			handles[w] = def.enqueue_task(barrier_task, 1, 1, &b, def.task_context);
+			cr_assert_not_null(handles[w]);
+		}
+		spin_until_all_started(&b); /* worker 0, on this thread */
+		for (int w = 1; w < def.worker_count; ++w)
+			def.finish_task(handles[w], def.task_context);
+		uint_least64_t all = (((uint_least64_t)1 << worker_count) - 1) & ~(uint_least64_t)1;
+		cr_assert_eq(atomic_load(&b.workers_seen), all,
+		             "frame %d: the tasks did not run on distinct pool threads 1..%d", frame,
+		             worker_count - 1);
+	}
+	plait_thread_pool_destroy(pool);
+}
+
+Test(threads, spinning_workers_two, .timeout = 120)
+{
+	check_spinning_workers(2, 500);
+}
+
+Test(threads, spinning_workers_eight, .timeout = 120)
+{
+	check_spinning_workers(8, 200);
+}
+
+/* ---- Results do not depend on the worker count ---------------------------------------------- */
+
+/* A 40 x 40 cloth with self-collision falling on a sphere, and 64 particles dropped on it;
+ * positions of both objects after 30 frames. */
+static plait_vec3 *drape_positions(int worker_count, int *count)
+{
+	plait_thread_pool *pool = NULL;
+	if (worker_count > 1) {
+		pool = plait_thread_pool_create(worker_count);
+		cr_assert_not_null(pool);
+	}
+	plait_world_def wdef = plait_default_world_def();
+	plait_thread_pool_attach(pool, &wdef);
+	cr_assert_eq(wdef.worker_count, worker_count);
+	plait_error error = {0};
+	plait_world_id world = plait_create_world(&wdef, &error);
+	cr_assert(!plait_world_id_is_null(world), "%s", error.message);
+
+	test_grid grid = test_grid_make(40, 40, 1.6f, 1.6f);
+	for (int i = 0; i < grid.vertex_count; ++i)
+		grid.positions[i].y = 1.2f;
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.self_collide = true;
+	cloth.surface.friction = 0.3f;
+	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
+	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
+
+	plait_vec3 drops[64];
+	for (int i = 0; i < 64; ++i)
+		drops[i] = (plait_vec3){-0.35f + 0.1f * (float)(i % 8), 1.6f, -0.35f + 0.1f * (float)(i / 8)};
+	plait_particles_def particles = plait_default_particles_def();
+	particles.positions = drops;
+	particles.count = 64;
+	particles.radius = 0.03f;
+	plait_object_id particles_id = plait_create_particles(world, &particles, &error);
+	cr_assert(!plait_object_id_is_null(particles_id), "%s", error.message);
+
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_SPHERE;
+	sphere.center = (plait_vec3){0.0f, 0.5f, 0.0f};
+	sphere.radius = 0.5f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
+	plait_collider_def ground = plait_default_collider_def();
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, &error)), "%s", error.message);
+
+	cr_assert(test_step_frames(world, 30));
+	*count = grid.vertex_count + 64;
+	plait_vec3 *x = malloc(sizeof *x * (size_t)*count);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, grid.vertex_count, x, &error), PLAIT_OK, "%s",
+	             error.message);
+	cr_assert_eq(plait_object_get_positions(particles_id, 0, 64, x + grid.vertex_count, &error), PLAIT_OK,
+	             "%s", error.message);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+	plait_thread_pool_destroy(pool);
+	return x;
+}
+
+Test(threads, same_positions_with_1_2_and_8_workers, .timeout = 600)
+{
+	int count1, count2, count8;
+	plait_vec3 *x1 = drape_positions(1, &count1);
+	plait_vec3 *x2 = drape_positions(2, &count2);
+	plait_vec3 *x8 = drape_positions(8, &count8);
+	cr_assert_eq(count1, count2);
+	cr_assert_eq(count1, count8);
+	cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0, "2 workers give other positions than 1");
+	cr_expect(memcmp(x1, x8, sizeof *x1 * (size_t)count1) == 0, "8 workers give other positions than 1");
+	free(x1);
+	free(x2);
+	free(x8);
+}
+
+/* ---- plait run --threads -------------------------------------------------------------------- */
+
+typedef struct cli_result {
+	int code;
+	char *out;
+	char *err;
+} cli_result;
+
+static cli_result run_cli(int argc, const char **argv)
+{
+	cli_result result = {0};
+	size_t out_size = 0, err_size = 0;
+	FILE *out = open_memstream(&result.out, &out_size);
+	FILE *err = open_memstream(&result.err, &err_size);
+	cr_assert(out != NULL && err != NULL);
+	result.code = plait_cli_main(argc, (char **)argv, out, err);
+	fclose(out);
+	fclose(err);
+	return result;
+}
+
+static void free_result(cli_result *result)
+{
+	free(result->out);
+	free(result->err);
+}
+
+// rm -r of a folder of plain files and its one level of subfolders.
+static void remove_tree(const char *path)
+{
+	DIR *dir = opendir(path);
+	if (dir == NULL)
+		return;
+	struct dirent *entry;
+	while ((entry = readdir(dir)) != NULL) {
+		if (strcmp(entry->d_name, ".") == 0 || strcmp(entry->d_name, "..") == 0)
+			continue;
+		char child[1024];
+		snprintf(child, sizeof child, "%s/%s", path, entry->d_name);
+		if (unlink(child) != 0)
+			remove_tree(child);
+	}
+	closedir(dir);
+	rmdir(path);
+}
+
+static char *read_file(const char *path, size_t *size)
+{
+	FILE *f = fopen(path, "rb");
+	if (f == NULL)
+		return NULL;
+	fseek(f, 0, SEEK_END);
+	long n = ftell(f);
+	fseek(f, 0, SEEK_SET);
+	char *data = malloc((size_t)n + 1);
+	*size = fread(data, 1, (size_t)n, f);
+	data[*size] = '\0';
+	fclose(f);
+	return data;
+}
+
+Test(threads, run_rejects_bad_thread_counts)
+{
+	const char *cases[][4] = {
+	    {"plait", "run", "--threads", "0"},   {"plait", "run", "--threads", "257"},
+	    {"plait", "run", "--threads", "two"}, {"plait", "run", "--threads", "2x"},
+	    {"plait", "run", "--threads", "-3"},  {"plait", "run", "--threads", ""},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+		cli_result r = run_cli(4, cases[i]);
+		cr_expect_eq(r.code, PLAIT_EXIT_USAGE, "--threads '%s': exit %d", cases[i][3], r.code);
+		cr_expect(strstr(r.err, "--threads expects a whole number from 1 to 256") != NULL, "%s", r.err);
+		cr_expect(strstr(r.err, "usage:") != NULL, "%s", r.err);
+		free_result(&r);
+	}
+	const char *missing[] = {"plait", "run", "--threads"};
+	cli_result r = run_cli(3, missing);
+	cr_expect_eq(r.code, PLAIT_EXIT_USAGE);
+	cr_expect(strstr(r.err, "--threads needs a value") != NULL, "%s", r.err);
+	free_result(&r);
+
+	const char *help[] = {"plait", "run", "--help"};
+	r = run_cli(3, help);
+	cr_expect_eq(r.code, PLAIT_EXIT_OK);
+	cr_expect(strstr(r.out, "--threads N") != NULL, "%s", r.out);
+	free_result(&r);
+}
+
+Test(threads, run_writes_the_same_frames_with_any_thread_count, .timeout = 300)
+{
+	char dir[] = "/tmp/plait_threads_test_XXXXXX";
+	cr_assert_not_null(mkdtemp(dir));
+	char scene[1100], out1[1100], out3[1100];
+	snprintf(scene, sizeof scene, "%s/scene.json", dir);
+	snprintf(out1, sizeof out1, "%s/one", dir);
+	snprintf(out3, sizeof out3, "%s/three", dir);
+	FILE *f = fopen(scene, "w");
+	cr_assert_not_null(f);
+	fputs("{\"world\": {\"fps\": 24}, \"frames\": 4, \"objects\": [\n"
+	      " {\"name\": \"sheet\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [8, 8],\n"
+	      "  \"center\": [0, 1, 0]}, \"pins\": [0, 8]},\n"
+	      " {\"name\": \"ball\", \"type\": \"collider\", \"shape\": \"sphere\", \"center\": [0, 0.5, 0], "
+	      "\"radius\": 0.3}]}\n",
+	      f);
+	fclose(f);
+	const char *run1[] = {"plait", "run", scene, "--out", out1, "--format", "pc2", "--threads", "1"};
+	const char *run3[] = {"plait", "run", scene, "--out", out3, "--format=pc2", "--threads=3"};
+	cli_result r1 = run_cli(9, run1);
+	cr_expect_eq(r1.code, PLAIT_EXIT_OK, "%s", r1.err);
+	cli_result r3 = run_cli(7, run3);
+	cr_expect_eq(r3.code, PLAIT_EXIT_OK, "%s", r3.err);
+	free_result(&r1);
+	free_result(&r3);
+	char path1[1200], path3[1200];
+	snprintf(path1, sizeof path1, "%s/sheet.pc2", out1);
+	snprintf(path3, sizeof path3, "%s/sheet.pc2", out3);
+	size_t size1 = 0, size3 = 0;
+	char *data1 = read_file(path1, &size1), *data3 = read_file(path3, &size3);
+	cr_assert_not_null(data1);
+	cr_assert_not_null(data3);
+	cr_expect_eq(size1, 32 + 5 * 81 * 12);
+	cr_expect(size1 == size3 && memcmp(data1, data3, size1) == 0, "--threads 3 wrote other frames than 1");
+	free(data1);
+	free(data3);
+	remove_tree(dir);
+}
+
+/* ---- examples/hang-128.json: the hang-128 benchmark as a scene --------------------------------- */
+
+Test(threads, hang_128_example_scene_loads, .timeout = 300)
+{
+	plait_scene scene;
+	plait_tool_error error = {{0}};
+	cr_assert(plait_scene_load(PLAIT_SOURCE_DIR "/examples/hang-128.json", &scene, &error), "%s",
+	          error.message);
+	cr_expect_eq(scene.warning_count, 0);
+	cr_expect_eq(scene.frames, 300);
+	cr_expect_float_eq(scene.world.fps, 60.0f, 0.0f);
+	cr_expect_float_eq(scene.world.gravity.y, -9.81f, 1e-6f);
+	cr_assert_eq(scene.object_count, 2);
+	const plait_scene_object *cloth = &scene.objects[0];
+	cr_expect_eq(cloth->type, PLAIT_OBJECT_CLOTH);
+	cr_assert_eq(cloth->vertex_count, 128 * 128);
+	cr_expect_eq(cloth->face_count, 127 * 127);
+	cr_assert_eq(cloth->pin_count, 2);
+	// The pins are the corners at z = -1, x = -1 and x = +1.
+	for (int p = 0; p < 2; ++p) {
+		plait_vec3 x = cloth->positions[cloth->pins[p]];
+		cr_expect_float_eq(x.z, -1.0f, 1e-6f, "pin %d at z %g", p, (double)x.z);
+		cr_expect_float_eq(x.y, 0.0f, 1e-6f);
+		cr_expect_float_eq(fabsf(x.x), 1.0f, 1e-6f, "pin %d at x %g", p, (double)x.x);
+	}
+	cr_expect(cloth->positions[cloth->pins[0]].x != cloth->positions[cloth->pins[1]].x);
+	// 1 kg per vertex on average: 16384 kg over 4 m^2.
+	cr_expect_float_eq(cloth->cloth.density * 4.0f, 16384.0f, 1e-3f);
+	cr_expect_float_eq(cloth->cloth.stretch_resistance, 10000.0f, 0.0f);
+	cr_expect_float_eq(cloth->cloth.compression_resistance, 10000.0f, 0.0f);
+	cr_expect_eq(cloth->cloth.iterations, 20);
+	cr_expect_eq(cloth->cloth.tethers, PLAIT_TETHER_EUCLIDEAN);
+	const plait_scene_object *sphere = &scene.objects[1];
+	cr_expect_eq(sphere->type, PLAIT_OBJECT_COLLIDER);
+	cr_expect_eq(sphere->collider.shape, PLAIT_SHAPE_SPHERE);
+	cr_expect_float_eq(sphere->collider.radius, 0.5f, 0.0f);
+	cr_expect_float_eq(sphere->collider.center.y, -0.75f, 0.0f);
+
+	// The solver takes it (one frame only: the scene is heavy for a test, above all under ASan).
+	plait_thread_pool *pool = plait_thread_pool_create(2);
+	cr_assert_not_null(pool);
+	plait_thread_pool_attach(pool, &scene.world);
+	plait_world_id world;
+	cr_assert(plait_scene_create_world(&scene, &world, &error), "%s", error.message);
+	cr_expect(plait_scene_apply_frame(&scene, world, 1, &error), "%s", error.message);
+	cr_expect(test_step_frames(world, 1));
+	plait_destroy_world(world);
+	plait_scene_free(&scene);
+	plait_thread_pool_destroy(pool);
+}
