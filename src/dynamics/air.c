@@ -189,11 +189,11 @@ static vec3 solve_implicit_drag(float mass, float h, const float *k, vec3 rhs)
 	          (c02 * rhs.x + c12 * rhs.y + c22 * rhs.z) * inverse);
 }
 
-void plait_integrate_velocities(plait_sim *sim, float h, bool air)
+void plait_integrate_velocities(plait_sim *sim, float h, bool air, int begin, int end)
 {
 	plait_particles *p = &sim->particles;
 	vec3 gravity = sim->settings.gravity;
-	for (int i = 0; i < p->count; ++i) {
+	for (int i = begin; i < end; ++i) {
 		if (p->point[i].w == 0.0f) {
 			continue;
 		}

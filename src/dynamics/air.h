@@ -32,6 +32,6 @@ bool plait_air_active(const plait_sim *sim);
 void plait_air_accumulate(plait_sim *sim, double time);
 
 /* v <- velocity after gravity, air and damping over h, for every free particle. */
-void plait_integrate_velocities(plait_sim *sim, float h, bool air);
+void plait_integrate_velocities(plait_sim *sim, float h, bool air, int begin, int end);
 
 #endif

@@ -40,7 +40,7 @@ void plait_solve_distance(plait_distance_block *block, plait_particles *particle
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
                       plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. */
-void plait_solve_tethers(plait_tether_block *block, plait_particles *particles);
+void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel);
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);
 
 /* Signed dihedral angle (radians, in (-pi, pi]) of the hinge p0-p1 with wings p2, p3: zero when

@@ -252,36 +252,29 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 	return true;
 }
 
-static int collide_with_collider(plait_sim *sim, const plait_collider *c)
+/* One collider against a range of particles: each particle on its own, so ranges run on
+ * any worker with the same result. */
+typedef struct collider_job {
+	plait_sim *sim;
+	const plait_collider *c;
+	bool bounded;
+	vec3 world_lower, world_upper;
+	_Atomic int contacts;
+} collider_job;
+
+static void collide_collider_range(void *context, int begin, int end)
 {
+	collider_job *job = context;
+	plait_sim *sim = job->sim;
+	const plait_collider *c = job->c;
 	plait_particles *p = &sim->particles;
 	const plait_rigid *r0 = &c->rigid_start, *r1 = &c->rigid_end;
 	float inverse_scale = 1.0f / r1->scale;
 	float inverse_h = 1.0f / sim->substep_time;
+	bool bounded = job->bounded;
+	vec3 world_lower = job->world_lower, world_upper = job->world_upper;
 	int contacts = 0;
-	/* Cull with the collider's world box over the substep (unbounded for planes), grown by the
-	 * thickest particle: most particles never reach the transforms and the sweep. */
-	vec3 lower0, upper0;
-	bool bounded = plait_shape_bounds(&c->shape, &lower0, &upper0);
-	vec3 world_lower = {0}, world_upper = {0};
-	if (bounded) {
-		float grow = c->thickness;
-		for (int i = 0; i < p->count; ++i) {
-			grow = plait_maxf(grow, p->radius[i] + c->thickness);
-		}
-		world_lower = v3(INFINITY, INFINITY, INFINITY);
-		world_upper = v3(-INFINITY, -INFINITY, -INFINITY);
-		for (int corner = 0; corner < 8; ++corner) {
-			vec3 q = {corner & 1 ? upper0.x : lower0.x, corner & 2 ? upper0.y : lower0.y,
-			          corner & 4 ? upper0.z : lower0.z};
-			vec3 a = plait_rigid_apply(r0, q), b = plait_rigid_apply(r1, q);
-			world_lower = v3_min(world_lower, v3_min(a, b));
-			world_upper = v3_max(world_upper, v3_max(a, b));
-		}
-		world_lower = v3_sub(world_lower, v3(grow, grow, grow));
-		world_upper = v3_add(world_upper, v3(grow, grow, grow));
-	}
-	for (int i = 0; i < p->count; ++i) {
+	for (int i = begin; i < end; ++i) {
 		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->point[i].w == 0.0f) {
 			continue;
 		}
@@ -348,7 +341,40 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		}
 		++contacts;
 	}
-	return contacts;
+	atomic_fetch_add_explicit(&job->contacts, contacts, memory_order_relaxed);
+}
+
+#define COLLIDER_GRAIN 1024
+
+static int collide_with_collider(plait_sim *sim, const plait_collider *c)
+{
+	plait_particles *p = &sim->particles;
+	const plait_rigid *r0 = &c->rigid_start, *r1 = &c->rigid_end;
+	/* Cull with the collider's world box over the substep (unbounded for planes), grown by the
+	 * thickest particle: most particles never reach the transforms and the sweep. */
+	vec3 lower0, upper0;
+	bool bounded = plait_shape_bounds(&c->shape, &lower0, &upper0);
+	vec3 world_lower = {0}, world_upper = {0};
+	if (bounded) {
+		float grow = c->thickness;
+		for (int i = 0; i < p->count; ++i) {
+			grow = plait_maxf(grow, p->radius[i] + c->thickness);
+		}
+		world_lower = v3(INFINITY, INFINITY, INFINITY);
+		world_upper = v3(-INFINITY, -INFINITY, -INFINITY);
+		for (int corner = 0; corner < 8; ++corner) {
+			vec3 q = {corner & 1 ? upper0.x : lower0.x, corner & 2 ? upper0.y : lower0.y,
+			          corner & 4 ? upper0.z : lower0.z};
+			vec3 a = plait_rigid_apply(r0, q), b = plait_rigid_apply(r1, q);
+			world_lower = v3_min(world_lower, v3_min(a, b));
+			world_upper = v3_max(world_upper, v3_max(a, b));
+		}
+		world_lower = v3_sub(world_lower, v3(grow, grow, grow));
+		world_upper = v3_add(world_upper, v3(grow, grow, grow));
+	}
+	collider_job job = {sim, c, bounded, world_lower, world_upper, 0};
+	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, p->count, COLLIDER_GRAIN);
+	return atomic_load_explicit(&job.contacts, memory_order_relaxed);
 }
 
 /* Earliest t in [0, 1] at which |d0 + t (d1 - d0)| <= distance; false if never. */

@@ -57,19 +57,34 @@ static void reset_multipliers(plait_sim *sim)
 	clear_floats(sim->rod_bend.lambda, sim->rod_bend.count);
 }
 
-/* Start of a substep: pinned particles move to their interpolated targets, free ones to
- * their predicted positions. v already holds the end-of-substep velocity (gravity and air
- * applied); moving with v - h g / 2, the mean velocity over the substep under constant gravity,
- * makes free flight exact (x0 + v0 t + g t^2 / 2) instead of off by g h t / 2. */
-static void predict_positions(plait_sim *sim, float h, float t_end)
+/* The per-particle stages of a substep; particles are independent there, so they run as
+ * parallel loops. */
+typedef struct particle_job {
+	plait_sim *sim;
+	float h, t_end;
+	bool air;
+} particle_job;
+
+#define PARTICLE_GRAIN 2048
+
+/* Start of a substep: velocities take gravity, air and damping; then pinned particles move to
+ * their interpolated targets, free ones to their predicted positions. v then holds the
+ * end-of-substep velocity; moving with v - h g / 2, the mean velocity over the substep under
+ * constant gravity, makes free flight exact (x0 + v0 t + g t^2 / 2) instead of off by
+ * g h t / 2. */
+static void begin_substep_range(void *context, int begin, int end)
 {
+	const particle_job *job = context;
+	plait_sim *sim = job->sim;
 	plait_particles *p = &sim->particles;
+	float h = job->h;
+	plait_integrate_velocities(sim, h, job->air, begin, end);
 	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
-	for (int i = 0; i < p->count; ++i) {
+	for (int i = begin; i < end; ++i) {
 		p->x_prev[i] = p->point[i].x;
 		p->v_pre[i] = p->v[i];
 		if (p->point[i].w == 0.0f) {
-			p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], t_end);
+			p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], job->t_end);
 		} else {
 			p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(p->v[i], half_gravity_step));
 		}
@@ -78,12 +93,13 @@ static void predict_positions(plait_sim *sim, float h, float t_end)
 
 /* v = (x - x_prev) / h is the mean velocity of the substep; adding h g / 2 back gives the
  * velocity at its end (the inverse of the prediction above). */
-static void update_velocities(plait_sim *sim, float h)
+static void update_velocities_range(void *context, int begin, int end)
 {
-	plait_particles *p = &sim->particles;
-	float inverse_h = 1.0f / h;
-	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
-	for (int i = 0; i < p->count; ++i) {
+	const particle_job *job = context;
+	plait_particles *p = &job->sim->particles;
+	float inverse_h = 1.0f / job->h;
+	vec3 half_gravity_step = v3_scale(job->sim->settings.gravity, 0.5f * job->h);
+	for (int i = begin; i < end; ++i) {
 		vec3 mean = v3_scale(v3_sub(p->point[i].x, p->x_prev[i]), inverse_h);
 		p->v[i] = p->point[i].w > 0.0f ? v3_add(mean, half_gravity_step) : mean;
 	}
@@ -111,7 +127,7 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		sim->constraint_solves += sim->bend.count + sweeps * sim->bend_distance.count + sim->rod_bend.count;
 		break;
 	case PLAIT_KIND_TETHER:
-		plait_solve_tethers(&sim->tether, &sim->particles);
+		plait_solve_tethers(&sim->tether, &sim->particles, &sim->parallel);
 		sim->constraint_solves += sim->tether.count;
 		break;
 	case PLAIT_KIND_COLLISION:
@@ -156,8 +172,9 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		if (air) {
 			plait_air_accumulate(sim, sim->time + (double)(t0 * frame_time));
 		}
-		plait_integrate_velocities(sim, h, air);
-		predict_positions(sim, h, t1);
+		particle_job job = {sim, h, t1, air};
+		plait_parallel_for(&sim->parallel, begin_substep_range, &job, 0, sim->particles.count,
+		                   PARTICLE_GRAIN);
 		reset_multipliers(sim);
 		if (!plait_contacts_begin_substep(sim)) {
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
@@ -177,7 +194,8 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 			run_event(sim, (plait_kind)sim->schedule_kinds[k], inverse_h_squared, sweep);
 		}
 
-		update_velocities(sim, h);
+		plait_parallel_for(&sim->parallel, update_velocities_range, &job, 0, sim->particles.count,
+		                   PARTICLE_GRAIN);
 		plait_contacts_end_substep(sim);
 	}
 	return PLAIT_OK;
