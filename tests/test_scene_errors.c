@@ -91,6 +91,12 @@ Test(scene_errors, out_of_range_values_of_several_keys)
 	     "scene.json: objects[0].rest_length_scale: expected a number from 0.01 to 10, got 0.001"},
 	    {"{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"stretch_resistance\": 20000}]}",
 	     "scene.json: objects[0].stretch_resistance: expected a number from 0 to 10000, got 20000"},
+	    {"{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"shear_iterations\": -1}]}",
+	     "scene.json: objects[0].shear_iterations: expected an integer from 0 to 1000, got -1"},
+	    {"{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"bend_iterations\": 1001}]}",
+	     "scene.json: objects[0].bend_iterations: expected an integer from 0 to 1000, got 1001"},
+	    {"{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"shear_iterations\": 2.5}]}",
+	     "scene.json: objects[0].shear_iterations: expected an integer from 0 to 1000, got 2.5"},
 	    {"{\"objects\": [{\"type\": \"particles\", \"positions\": [[0,0,0]], \"radius\": 0}]}",
 	     "scene.json: objects[0].radius: expected a number > 0 and <= 1000000, got 0"},
 	    {"{\"objects\": [{\"type\": \"curve\", \"positions\": [[0,0,0],[1,0,0]], \"damp\": 101}]}",
@@ -191,6 +197,21 @@ Test(scene_errors, unknown_shape)
 	expect_message(
 	    "{\"objects\": [{\"type\": \"collider\", \"shape\": \"cube\"}]}",
 	    "scene.json: objects[0].shape: expected one of plane, sphere, capsule, box, mesh, got \"cube\"");
+}
+
+Test(scene_errors, unknown_bend_model)
+{
+	expect_message("{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"bend_model\": \"springs\"}]}",
+	               "scene.json: objects[0].bend_model: expected one of dihedral, distance, got \"springs\"");
+	expect_message("{\"objects\": [{\"type\": \"collider\", \"shape\": \"plane\"},"
+	               " {\"type\": \"cloth\", " CLOTH_GRID ", \"bend_model\": 1}]}",
+	               "scene.json: objects[1].bend_model: expected one of dihedral, distance, got 1");
+	// Misspelt keys are suggested their closest valid key, as every other key.
+	expect_message("{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"bend_modle\": \"distance\"}]}",
+	               "scene.json: objects[0].bend_modle: unknown key (did you mean \"bend_model\"?)");
+	expect_message(
+	    "{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"shear_iteration\": 4}]}",
+	    "scene.json: objects[0].shear_iteration: unknown key (did you mean \"shear_iterations\"?)");
 }
 
 Test(scene_errors, mesh_collider_needs_a_mesh_file)

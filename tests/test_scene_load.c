@@ -206,6 +206,10 @@ Test(scene_load, defaults_come_from_the_api)
 	cr_expect_float_eq(scene.objects[0].cloth.surface.friction, cloth.surface.friction, 0.0f);
 	cr_expect_float_eq(scene.objects[0].cloth.surface.thickness, cloth.surface.thickness, 0.0f);
 	cr_expect_eq(scene.objects[0].cloth.surface.collide, cloth.surface.collide);
+	cr_expect_eq(scene.objects[0].cloth.bend_model, cloth.bend_model);
+	cr_expect_eq(scene.objects[0].cloth.iterations, cloth.iterations);
+	cr_expect_eq(scene.objects[0].cloth.shear_iterations, cloth.shear_iterations);
+	cr_expect_eq(scene.objects[0].cloth.bend_iterations, cloth.bend_iterations);
 	plait_curve_def curve = plait_default_curve_def();
 	cr_expect_float_eq(scene.objects[1].curve.mass, curve.mass, 0.0f);
 	cr_expect_float_eq(scene.objects[1].curve.stretch_resistance, curve.stretch_resistance, 0.0f);
@@ -463,5 +467,31 @@ Test(scene_load, self_collide_is_read_for_cloth)
 	     " \"self_collide\": true}]}",
 	     &scene);
 	cr_assert(scene.objects[0].cloth.self_collide);
+	plait_scene_free(&scene);
+}
+
+Test(scene_load, bend_model_and_iterations_are_read_for_cloth)
+{
+	plait_scene scene;
+	load("{\"objects\": [{\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [4, 4]},"
+	     " \"pins\": [0, 4], \"bend_model\": \"distance\", \"iterations\": 12, \"shear_iterations\": 7,"
+	     " \"bend_iterations\": 1000},"
+	     " {\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	     " \"bend_model\": \"dihedral\", \"shear_iterations\": 0}]}",
+	     &scene);
+	const plait_cloth_def *a = &scene.objects[0].cloth;
+	cr_expect_eq(a->bend_model, PLAIT_BEND_DISTANCE);
+	cr_expect_eq(a->iterations, 12);
+	cr_expect_eq(a->shear_iterations, 7);
+	cr_expect_eq(a->bend_iterations, 1000);
+	const plait_cloth_def *b = &scene.objects[1].cloth;
+	cr_expect_eq(b->bend_model, PLAIT_BEND_DIHEDRAL);
+	cr_expect_eq(b->shear_iterations, 0);
+	cr_expect_eq(b->bend_iterations, 0);
+	// The library takes what the loader accepts.
+	plait_world_id world;
+	plait_tool_error error;
+	cr_assert(plait_scene_create_world(&scene, &world, &error), "%s", error.message);
+	plait_destroy_world(world);
 	plait_scene_free(&scene);
 }
