@@ -1,6 +1,7 @@
 /* The CLI run in-process on a tiny scene: output names and contents, PC2 layout, stats.jsonl,
  * no temporary files left, exit codes, and the exact shape of `explain --json`. */
 #include "cli.h"
+#include "test_cli.h"
 
 #include <criterion/criterion.h>
 #include <dirent.h>
@@ -21,55 +22,11 @@ static const char *tiny_scene =
     " {\"name\": \"dots\", \"type\": \"particles\", \"positions\": [[-2, 1, 0], [-2, 1.5, 0]]},\n"
     " {\"name\": \"ground\", \"type\": \"collider\", \"shape\": \"plane\"}]}\n";
 
-typedef struct cli_result {
-	int code;
-	char *out;
-	char *err;
-} cli_result;
-
-// Runs `plait ARGS...` in-process with captured output.
-static cli_result run_cli(int argc, const char **argv)
-{
-	cli_result result = {0};
-	size_t out_size = 0, err_size = 0;
-	FILE *out = open_memstream(&result.out, &out_size);
-	FILE *err = open_memstream(&result.err, &err_size);
-	cr_assert(out != NULL && err != NULL);
-	result.code = plait_cli_main(argc, (char **)argv, out, err);
-	fclose(out);
-	fclose(err);
-	return result;
-}
-
-static void free_result(cli_result *result)
-{
-	free(result->out);
-	free(result->err);
-}
-
 static char *make_temp_dir(void)
 {
 	char *dir = strdup("/tmp/plait_cli_test_XXXXXX");
 	cr_assert_not_null(mkdtemp(dir));
 	return dir;
-}
-
-// rm -r of a test's temporary folder.
-static void remove_tree(const char *path)
-{
-	DIR *dir = opendir(path);
-	if (dir != NULL) {
-		struct dirent *entry;
-		while ((entry = readdir(dir)) != NULL) {
-			if (strcmp(entry->d_name, ".") == 0 || strcmp(entry->d_name, "..") == 0)
-				continue;
-			char child[1024];
-			snprintf(child, sizeof child, "%s/%s", path, entry->d_name);
-			remove_tree(child);
-		}
-		closedir(dir);
-	}
-	remove(path);
 }
 
 static char *write_scene(const char *dir, const char *json)
@@ -81,23 +38,6 @@ static char *write_scene(const char *dir, const char *json)
 	fputs(json, f);
 	fclose(f);
 	return path;
-}
-
-static char *read_file(const char *path, size_t *size)
-{
-	FILE *f = fopen(path, "rb");
-	if (f == NULL)
-		return NULL;
-	fseek(f, 0, SEEK_END);
-	long n = ftell(f);
-	fseek(f, 0, SEEK_SET);
-	char *data = malloc((size_t)n + 1);
-	size_t got = fread(data, 1, (size_t)n, f);
-	fclose(f);
-	data[got] = '\0';
-	if (size != NULL)
-		*size = got;
-	return data;
 }
 
 static bool exists(const char *dir, const char *name)

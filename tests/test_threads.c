@@ -4,6 +4,7 @@
  * hang-128 example scene loads. */
 #include "cli.h"
 #include "scene.h"
+#include "test_cli.h"
 #include "test_support.h"
 #include "thread_pool.h"
 
@@ -306,65 +307,6 @@ Test(threads, same_positions_with_1_2_and_8_workers, .timeout = 600)
 }
 
 /* ---- plait run --threads -------------------------------------------------------------------- */
-
-typedef struct cli_result {
-	int code;
-	char *out;
-	char *err;
-} cli_result;
-
-static cli_result run_cli(int argc, const char **argv)
-{
-	cli_result result = {0};
-	size_t out_size = 0, err_size = 0;
-	FILE *out = open_memstream(&result.out, &out_size);
-	FILE *err = open_memstream(&result.err, &err_size);
-	cr_assert(out != NULL && err != NULL);
-	result.code = plait_cli_main(argc, (char **)argv, out, err);
-	fclose(out);
-	fclose(err);
-	return result;
-}
-
-static void free_result(cli_result *result)
-{
-	free(result->out);
-	free(result->err);
-}
-
-// rm -r of a folder of plain files and its one level of subfolders.
-static void remove_tree(const char *path)
-{
-	DIR *dir = opendir(path);
-	if (dir == NULL)
-		return;
-	struct dirent *entry;
-	while ((entry = readdir(dir)) != NULL) {
-		if (strcmp(entry->d_name, ".") == 0 || strcmp(entry->d_name, "..") == 0)
-			continue;
-		char child[1024];
-		snprintf(child, sizeof child, "%s/%s", path, entry->d_name);
-		if (unlink(child) != 0)
-			remove_tree(child);
-	}
-	closedir(dir);
-	rmdir(path);
-}
-
-static char *read_file(const char *path, size_t *size)
-{
-	FILE *f = fopen(path, "rb");
-	if (f == NULL)
-		return NULL;
-	fseek(f, 0, SEEK_END);
-	long n = ftell(f);
-	fseek(f, 0, SEEK_SET);
-	char *data = malloc((size_t)n + 1);
-	*size = fread(data, 1, (size_t)n, f);
-	data[*size] = '\0';
-	fclose(f);
-	return data;
-}
 
 Test(threads, run_rejects_bad_thread_counts)
 {
