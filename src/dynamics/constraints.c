@@ -128,11 +128,9 @@ static void project_bend_batch(plait_bend_block *block, plait_point *points, int
 	for (int lane = 0; lane < LANES; ++lane) {
 		int c = first + (lane < n ? lane : 0);
 		for (int k = 0; k < 4; ++k) {
-			const plait_point *point = &points[block->quad[c][k]];
-			px[k][lane] = point->x.x;
-			py[k][lane] = point->x.y;
-			pz[k][lane] = point->x.z;
-			wq[k][lane] = lane < n ? point->w : 0.0f;
+			float w;
+			plait_load_point(&points[block->quad[c][k]], &px[k][lane], &py[k][lane], &pz[k][lane], &w);
+			wq[k][lane] = lane < n ? w : 0.0f;
 		}
 		rest[lane] = block->rest_angle[c];
 		compliance[lane] = block->compliance[c];
@@ -202,7 +200,7 @@ static void project_bend_batch(plait_bend_block *block, plait_point *points, int
 		int c = first + lane;
 		block->lambda[c] = lambda[lane];
 		for (int k = 0; k < 4; ++k) {
-			points[block->quad[c][k]].x = (vec3){px[k][lane], py[k][lane], pz[k][lane]};
+			plait_store_point(&points[block->quad[c][k]], px[k][lane], py[k][lane], pz[k][lane], wq[k][lane]);
 		}
 	}
 }

@@ -6,6 +6,9 @@
 #define PLAIT_DYNAMICS_SIM_H
 
 #include <stdint.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "collision/shape.h"
 #include "core/alloc.h"
@@ -42,6 +45,38 @@ typedef struct plait_point {
 	vec3 x;  /* position, scene units */
 	float w; /* inverse mass, 1/kg; 0 = pinned or kinematic */
 } plait_point;
+
+/* Points are read and written whole, 16 bytes at a time, by every kernel. A load that does not
+ * match the store it depends on (a 4-byte load from the middle of a 16-byte store still in
+ * flight, or a 16-byte load over several smaller stores) cannot take its data from the store
+ * buffer and waits for the store to retire: the dihedral bend kernel, reading x, y and z one
+ * by one just after the distance kernel wrote them whole, ran 2.1 times slower for the same
+ * instructions. */
+static inline void plait_load_point(const plait_point *point, float *x, float *y, float *z, float *w)
+{
+#if defined(__SSE2__)
+	__m128 v = _mm_load_ps(&point->x.x);
+	*x = _mm_cvtss_f32(v);
+	*y = _mm_cvtss_f32(_mm_shuffle_ps(v, v, _MM_SHUFFLE(1, 1, 1, 1)));
+	*z = _mm_cvtss_f32(_mm_movehl_ps(v, v));
+	*w = _mm_cvtss_f32(_mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 3, 3, 3)));
+#else
+	plait_point p = *point;
+	*x = p.x.x;
+	*y = p.x.y;
+	*z = p.x.z;
+	*w = p.w;
+#endif
+}
+
+static inline void plait_store_point(plait_point *point, float x, float y, float z, float w)
+{
+#if defined(__SSE2__)
+	_mm_store_ps(&point->x.x, _mm_setr_ps(x, y, z, w));
+#else
+	*point = (plait_point){{x, y, z}, w};
+#endif
+}
 
 /* Structure of arrays: one entry per particle of every object. */
 typedef struct plait_particles {
