@@ -255,3 +255,30 @@ Test(simd, asking_for_a_level_the_processor_lacks_is_an_error)
 	cr_assert(plait_world_id_is_null(plait_create_world(&wdef, &error)));
 	cr_assert(strstr(error.message, "simd") != NULL);
 }
+
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+
+/* A step flushes subnormals on its own threads only: the caller's floating-point mode is as it
+ * was before the step, and a subnormal computed after it is still subnormal. */
+Test(simd, a_step_leaves_the_callers_floating_point_mode_alone)
+{
+	unsigned int before = _mm_getcsr();
+	test_grid grid = test_grid_make(8, 8, 1.0f, 1.0f);
+	plait_world_id world = plait_create_world(&(plait_world_def){0}, NULL);
+	cr_assert(plait_world_id_is_null(world)); /* an uninitialised def is refused */
+	plait_world_def wdef = plait_default_world_def();
+	world = plait_create_world(&wdef, NULL);
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, NULL)));
+	cr_assert(test_step_frames(world, 2));
+	cr_assert_eq(_mm_getcsr() & ~0x3Fu, before & ~0x3Fu,
+	             "the control bits (not the sticky exception flags) must be restored");
+	volatile float tiny = 1e-38f;
+	volatile float half = tiny * 0.5f;
+	cr_assert(half > 0.0f, "subnormals are flushed after a step");
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+}
+#endif

@@ -1,5 +1,7 @@
 #include "core/parallel.h"
 
+#include "core/float_mode.h"
+
 #include <string.h>
 
 #if !defined(__STDC_NO_THREADS__)
@@ -87,6 +89,7 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 	(void)end_index;
 	(void)worker_index;
 	plait_parallel *parallel = task_context;
+	plait_float_mode saved_mode = plait_float_mode_enter();
 	uint32_t seen = ticket_generation(atomic_load_explicit(&parallel->ticket, memory_order_acquire));
 	for (;;) {
 		int spins = 0;
@@ -97,6 +100,7 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 				break;
 			}
 			if (atomic_load_explicit(&parallel->quit, memory_order_acquire)) {
+				plait_float_mode_leave(saved_mode);
 				return;
 			}
 			spin_wait(&spins);

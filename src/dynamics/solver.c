@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "core/error.h"
+#include "core/float_mode.h"
 #include "dynamics/air.h"
 #include "dynamics/colouring.h"
 #include "dynamics/constraints.h"
@@ -217,9 +218,11 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 		memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
 	}
 
+	plait_float_mode saved_mode = plait_float_mode_enter();
 	plait_parallel_begin(&sim->parallel);
 	result = run_substeps(sim, error);
 	plait_parallel_end(&sim->parallel);
+	plait_float_mode_leave(saved_mode);
 	if (result != PLAIT_OK) {
 		restore_frame_start(p);
 		return result;
