@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "dynamics/colouring.h"
+#include "dynamics/bend_kernel.h"
 #include "dynamics/distance_kernel.h"
 #include "test_support.h"
 
@@ -107,6 +108,70 @@ Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 	}
 }
 
+/* Hinges with disjoint corners, folded at random angles, some pinned, one degenerate (its
+ * wing on the hinge line): the AVX2 bend kernel gives the portable one's bits. */
+Test(simd, the_bend_kernels_agree_bit_for_bit)
+{
+	int counts[] = {1, 5, 8, 9, 23, 300};
+	for (size_t n = 0; n < sizeof counts / sizeof counts[0]; ++n) {
+		int count = counts[n];
+		plait_point *reference = NULL;
+		float *reference_lambda = NULL;
+		for (int l = 0; l < 3; ++l) {
+			if (!plait_simd_supported(levels[l])) {
+				continue;
+			}
+			uint32_t state = 777u + (uint32_t)count;
+			plait_bend_block block;
+			memset(&block, 0, sizeof block);
+			block.count = block.capacity = count;
+			block.quad = malloc(sizeof *block.quad * (size_t)count);
+			block.rest_angle = malloc(sizeof(float) * (size_t)count);
+			block.compliance = malloc(sizeof(float) * (size_t)count);
+			block.lambda = malloc(sizeof(float) * (size_t)count);
+			size_t bytes = (sizeof(plait_point) * (size_t)(4 * count) + 63) / 64 * 64;
+			plait_point *points = aligned_alloc(64, bytes);
+			for (int c = 0; c < count; ++c) {
+				for (int k = 0; k < 4; ++k) {
+					block.quad[c][k] = 4 * c + (k + c) % 4;
+				}
+				block.rest_angle[c] = 2.0f * random_unit(&state) - 1.0f;
+				block.compliance[c] = (next_random(&state) % 2) ? 0.0f : 1e-4f;
+				block.lambda[c] = random_unit(&state) - 0.5f;
+				for (int k = 0; k < 4; ++k) {
+					points[4 * c + k].x =
+					    (plait_vec3){random_unit(&state), random_unit(&state), random_unit(&state)};
+					points[4 * c + k].w = next_random(&state) % 6 == 0 ? 0.0f : 1.0f + random_unit(&state);
+				}
+			}
+			/* A wing on the hinge line: a degenerate hinge, left alone. */
+			points[block.quad[0][2]].x = points[block.quad[0][0]].x;
+			plait_bend_kernel *kernel = plait_bend_kernel_for(levels[l]);
+			for (int sweep = 0; sweep < 4; ++sweep) {
+				kernel(&block, points, 0, count, 3600.0f);
+			}
+			if (reference == NULL) {
+				reference = malloc(bytes);
+				reference_lambda = malloc(sizeof(float) * (size_t)count);
+				memcpy(reference, points, sizeof *points * (size_t)(4 * count));
+				memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
+			} else {
+				cr_assert(memcmp(reference, points, sizeof *points * (size_t)(4 * count)) == 0,
+				          "bend: level %d differs from the portable kernel at %d hinges", (int)levels[l],
+				          count);
+				cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0);
+			}
+			free(block.quad);
+			free(block.rest_angle);
+			free(block.compliance);
+			free(block.lambda);
+			free(points);
+		}
+		free(reference);
+		free(reference_lambda);
+	}
+}
+
 /* Every run holds constraints that share no particle, regions share no particle, and the order
  * is a permutation. */
 static void check_colouring(const int *vertices, int arity, int count, int particle_count)
@@ -186,13 +251,14 @@ Test(simd, runs_and_regions_share_no_particle)
 	free(pairs);
 }
 
-/* A cloth with everything on (tethers, bend as distances, self-collision, a collider), stepped
+/* Two cloths with everything on (tethers, bend as distances and as dihedral angles,
+ * self-collision, a collider), stepped
  * with each instruction set: identical positions, byte for byte. */
 Test(simd, a_simulation_is_byte_identical_with_every_instruction_set)
 {
 	test_grid grid = test_grid_make(40, 40, 2.0f, 2.0f);
-	plait_vec3 *reference = malloc(sizeof *reference * (size_t)grid.vertex_count);
-	plait_vec3 *positions = malloc(sizeof *positions * (size_t)grid.vertex_count);
+	plait_vec3 *reference = malloc(sizeof *reference * (size_t)(2 * grid.vertex_count));
+	plait_vec3 *positions = malloc(sizeof *positions * (size_t)(2 * grid.vertex_count));
 	for (int l = 0; l < 3; ++l) {
 		if (!plait_simd_is_supported(levels[l])) {
 			continue;
@@ -214,6 +280,21 @@ Test(simd, a_simulation_is_byte_identical_with_every_instruction_set)
 		def.pin_count = 2;
 		plait_object_id cloth = plait_create_cloth(world, &def, NULL);
 		cr_assert(!plait_object_id_is_null(cloth));
+		/* A second cloth, bent by dihedral angles, falling onto the first. */
+		plait_cloth_def folded = def;
+		plait_vec3 *lifted = malloc(sizeof *lifted * (size_t)grid.vertex_count);
+		for (int i = 0; i < grid.vertex_count; ++i) {
+			lifted[i] = (plait_vec3){grid.positions[i].x * 0.5f, 0.3f, grid.positions[i].z * 0.5f};
+		}
+		folded.mesh.positions = lifted;
+		folded.bend_model = PLAIT_BEND_DIHEDRAL;
+		folded.bend_resistance = 1.0f;
+		folded.tethers = PLAIT_TETHER_NONE;
+		folded.pins = NULL;
+		folded.pin_count = 0;
+		plait_object_id second = plait_create_cloth(world, &folded, NULL);
+		free(lifted);
+		cr_assert(!plait_object_id_is_null(second));
 		plait_collider_def sphere = plait_default_collider_def();
 		sphere.shape = PLAIT_SHAPE_SPHERE;
 		sphere.center = (plait_vec3){0.2f, -0.8f, 0.1f};
@@ -221,10 +302,11 @@ Test(simd, a_simulation_is_byte_identical_with_every_instruction_set)
 		plait_create_collider(world, &sphere, NULL);
 		cr_assert(test_step_frames(world, 40));
 		plait_object_get_positions(cloth, 0, grid.vertex_count, positions, NULL);
+		plait_object_get_positions(second, 0, grid.vertex_count, positions + grid.vertex_count, NULL);
 		if (l == 0) {
-			memcpy(reference, positions, sizeof *reference * (size_t)grid.vertex_count);
+			memcpy(reference, positions, sizeof *reference * (size_t)(2 * grid.vertex_count));
 		} else {
-			cr_assert(memcmp(reference, positions, sizeof *reference * (size_t)grid.vertex_count) == 0,
+			cr_assert(memcmp(reference, positions, sizeof *reference * (size_t)(2 * grid.vertex_count)) == 0,
 			          "simd level %d gave other positions than the portable kernel", (int)levels[l]);
 		}
 		plait_destroy_world(world);

@@ -1,5 +1,6 @@
 #include "dynamics/constraints.h"
 
+#include "dynamics/bend_kernel.h"
 #include "dynamics/colouring.h"
 #include "dynamics/distance_kernel.h"
 
@@ -237,7 +238,28 @@ static void project_bend(plait_bend_block *block, plait_point *points, int c, fl
 	}
 }
 
+void plait_project_bend_portable(plait_bend_block *block, plait_point *points, int begin, int end,
+                                 float inverse_h_squared)
+{
+	for (int first = begin; first < end; first += LANES) {
+		int n = end - first < LANES ? end - first : LANES;
+		project_bend_batch(block, points, first, n, inverse_h_squared);
+	}
+}
+
+plait_bend_kernel *plait_bend_kernel_for(plait_simd level)
+{
+#if PLAIT_X86_KERNELS
+	if (level == PLAIT_SIMD_AVX2 || level == PLAIT_SIMD_AVX512) {
+		return plait_project_bend_avx2;
+	}
+#endif
+	(void)level;
+	return plait_project_bend_portable;
+}
+
 typedef struct bend_job {
+	plait_bend_kernel *kernel;
 	plait_bend_block *block;
 	plait_point *points;
 	float inverse_h_squared;
@@ -246,10 +268,7 @@ typedef struct bend_job {
 static void bend_range(void *context, int begin, int end)
 {
 	bend_job *job = context;
-	for (int first = begin; first < end; first += LANES) {
-		int n = end - first < LANES ? end - first : LANES;
-		project_bend_batch(job->block, job->points, first, n, job->inverse_h_squared);
-	}
+	job->kernel(job->block, job->points, begin, end, job->inverse_h_squared);
 }
 
 static void bend_regions(void *context, int first, int last)
@@ -263,9 +282,9 @@ static void bend_regions(void *context, int first, int last)
 
 /* Forward only, in the order of sweep_distance. */
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
-                      plait_parallel *parallel)
+                      plait_bend_kernel *kernel, plait_parallel *parallel)
 {
-	bend_job job = {block, particles->point, inverse_h_squared};
+	bend_job job = {kernel, block, particles->point, inverse_h_squared};
 	const plait_colouring *colouring = &block->colouring;
 	plait_parallel_for(parallel, bend_regions, &job, 0, colouring->region_count, 1);
 	int boundary_first = colouring->run_count > 0 ? colouring->region_start[colouring->region_count] : 0;

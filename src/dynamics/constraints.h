@@ -9,6 +9,7 @@
 #define PLAIT_DYNAMICS_CONSTRAINTS_H
 
 #include "core/parallel.h"
+#include "dynamics/bend_kernel.h"
 #include "dynamics/distance_kernel.h"
 #include "dynamics/sim.h"
 
@@ -38,7 +39,7 @@ static inline plait_sweep plait_sweep_for(int iteration, int count)
 void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
                           plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel);
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
-                      plait_parallel *parallel);
+                      plait_bend_kernel *kernel, plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. */
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel);
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);

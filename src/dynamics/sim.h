@@ -246,6 +246,8 @@ typedef struct plait_sim {
 	plait_simd simd;
 	void (*distance_kernel)(struct plait_distance_block *block, plait_point *points, int begin, int end,
 	                        float inverse_h_squared);
+	void (*bend_kernel)(struct plait_bend_block *block, plait_point *points, int begin, int end,
+	                    float inverse_h_squared);
 	plait_parallel parallel;
 
 	int frame;

@@ -121,7 +121,7 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		sim->constraint_solves += sweeps * sim->shear.count;
 		break;
 	case PLAIT_KIND_BEND:
-		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared, &sim->parallel);
+		plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared, sim->bend_kernel, &sim->parallel);
 		plait_solve_distance(&sim->bend_distance, &sim->particles, inverse_h_squared, sweep,
 		                     sim->distance_kernel, &sim->parallel);
 		plait_solve_rod_bend(&sim->rod_bend, &sim->particles, inverse_h_squared);
