@@ -258,7 +258,7 @@ typedef struct collider_job {
 	plait_sim *sim;
 	const plait_collider *c;
 	bool bounded;
-	vec3 world_lower, world_upper;
+	vec3 world_lower, world_upper; /* box of the collider over the substep, grown */
 	_Atomic int contacts;
 } collider_job;
 
@@ -356,10 +356,7 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 	bool bounded = plait_shape_bounds(&c->shape, &lower0, &upper0);
 	vec3 world_lower = {0}, world_upper = {0};
 	if (bounded) {
-		float grow = c->thickness;
-		for (int i = 0; i < p->count; ++i) {
-			grow = plait_maxf(grow, p->radius[i] + c->thickness);
-		}
+		float grow = sim->largest_radius + c->thickness;
 		world_lower = v3(INFINITY, INFINITY, INFINITY);
 		world_upper = v3(-INFINITY, -INFINITY, -INFINITY);
 		for (int corner = 0; corner < 8; ++corner) {

@@ -250,6 +250,8 @@ typedef struct plait_sim {
 	                    float inverse_h_squared);
 	plait_parallel parallel;
 
+	float largest_radius; /* of any particle, scene units; measured at the start of each step */
+
 	int frame;
 	double time;        /* seconds simulated */
 	float substep_time; /* h, seconds */

@@ -213,6 +213,10 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 	plait_particles *p = &sim->particles;
 	sim->contacts = 0;
 	sim->constraint_solves = 0;
+	sim->largest_radius = 0.0f;
+	for (int i = 0; i < p->count; ++i) {
+		sim->largest_radius = plait_maxf(sim->largest_radius, p->radius[i]);
+	}
 	if (p->count > 0) {
 		memcpy(p->point_frame, p->point, sizeof(plait_point) * (size_t)p->count);
 		memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
