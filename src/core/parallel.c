@@ -12,15 +12,15 @@
 #define CHUNK_MASK ((UINT64_C(1) << CHUNK_BITS) - 1)
 #define GENERATION_MASK 0xFFFFFFu
 
-static inline uint64_t pack_ticket(uint32_t generation, int chunks, int next)
+static inline uint64_t pack_ticket(uint32_t generation, int end, int next)
 {
-	return ((uint64_t)generation << (2 * CHUNK_BITS)) | ((uint64_t)chunks << CHUNK_BITS) | (uint64_t)next;
+	return ((uint64_t)generation << (2 * CHUNK_BITS)) | ((uint64_t)end << CHUNK_BITS) | (uint64_t)next;
 }
 static inline uint32_t ticket_generation(uint64_t ticket)
 {
 	return (uint32_t)(ticket >> (2 * CHUNK_BITS));
 }
-static inline int ticket_chunks(uint64_t ticket)
+static inline int ticket_end(uint64_t ticket)
 {
 	return (int)((ticket >> CHUNK_BITS) & CHUNK_MASK);
 }
@@ -56,30 +56,45 @@ void plait_parallel_init(plait_parallel *parallel, plait_enqueue_task_fn *enqueu
 	worker_count = worker_count < 1 ? 1 : worker_count;
 	worker_count = worker_count > PLAIT_MAX_WORKERS ? PLAIT_MAX_WORKERS : worker_count;
 	parallel->worker_count = hooks ? worker_count : 1;
-	atomic_init(&parallel->ticket, 0);
+	atomic_init(&parallel->announce, 0);
 	atomic_init(&parallel->done, 0);
 	atomic_init(&parallel->quit, 0);
+	for (int k = 0; k < PLAIT_MAX_WORKERS; ++k) {
+		atomic_init(&parallel->shares[k].ticket, 0);
+		parallel->workers[k].parallel = parallel;
+		parallel->workers[k].index = k;
+	}
 }
 
-/* Claims and runs chunks of loop `generation` until none is left. The loop's description is
- * read only after a chunk was claimed: the calling thread cannot move on to another loop while
- * that chunk is pending, so the description is the claimed loop's. */
-static void run_chunks(plait_parallel *parallel, uint32_t generation)
+/* Claims and runs chunks of one share of loop `generation` until it is empty. The loop's
+ * description is read only after a chunk was claimed: the calling thread cannot move on to
+ * another loop while that chunk is pending, so the description is the claimed loop's. */
+static void run_share(plait_parallel *parallel, uint32_t generation, int share)
 {
-	uint64_t ticket = atomic_load_explicit(&parallel->ticket, memory_order_acquire);
+	_Atomic uint64_t *slot = &parallel->shares[share].ticket;
+	uint64_t ticket = atomic_load_explicit(slot, memory_order_acquire);
 	for (;;) {
-		if (ticket_generation(ticket) != generation || ticket_next(ticket) >= ticket_chunks(ticket)) {
+		if (ticket_generation(ticket) != generation || ticket_next(ticket) >= ticket_end(ticket)) {
 			return;
 		}
-		if (atomic_compare_exchange_weak_explicit(&parallel->ticket, &ticket, ticket + 1,
-		                                          memory_order_acq_rel, memory_order_acquire)) {
+		if (atomic_compare_exchange_weak_explicit(slot, &ticket, ticket + 1, memory_order_acq_rel,
+		                                          memory_order_acquire)) {
 			int chunk = ticket_next(ticket);
 			int begin = parallel->begin + chunk * parallel->grain;
 			int end = begin + parallel->grain < parallel->end ? begin + parallel->grain : parallel->end;
 			parallel->fn(parallel->context, begin, end);
 			atomic_fetch_add_explicit(&parallel->done, 1, memory_order_release);
-			ticket = atomic_load_explicit(&parallel->ticket, memory_order_acquire);
+			ticket = atomic_load_explicit(slot, memory_order_acquire);
 		}
+	}
+}
+
+/* Participant `self` empties its own share, then the others'. */
+static void run_chunks(plait_parallel *parallel, uint32_t generation, int self)
+{
+	int count = parallel->worker_count;
+	for (int k = 0; k < count; ++k) {
+		run_share(parallel, generation, (self + k) % count);
 	}
 }
 
@@ -88,15 +103,16 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 	(void)start_index;
 	(void)end_index;
 	(void)worker_index;
-	plait_parallel *parallel = task_context;
+	struct plait_parallel_worker *worker = task_context;
+	plait_parallel *parallel = worker->parallel;
 	plait_float_mode saved_mode = plait_float_mode_enter();
-	uint32_t seen = ticket_generation(atomic_load_explicit(&parallel->ticket, memory_order_acquire));
+	uint32_t seen = atomic_load_explicit(&parallel->announce, memory_order_acquire);
 	for (;;) {
 		int spins = 0;
-		uint64_t ticket;
+		uint32_t announced;
 		for (;;) {
-			ticket = atomic_load_explicit(&parallel->ticket, memory_order_acquire);
-			if (ticket_generation(ticket) != seen) {
+			announced = atomic_load_explicit(&parallel->announce, memory_order_acquire);
+			if (announced != seen) {
 				break;
 			}
 			if (atomic_load_explicit(&parallel->quit, memory_order_acquire)) {
@@ -105,8 +121,8 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 			}
 			spin_wait(&spins);
 		}
-		seen = ticket_generation(ticket);
-		run_chunks(parallel, seen);
+		seen = announced;
+		run_chunks(parallel, seen, worker->index);
 	}
 }
 
@@ -118,7 +134,8 @@ void plait_parallel_begin(plait_parallel *parallel)
 	atomic_store_explicit(&parallel->quit, 0, memory_order_release);
 	parallel->running = true;
 	for (int k = 1; k < parallel->worker_count; ++k) {
-		parallel->tasks[k] = parallel->enqueue_task(worker_task, 1, 1, parallel, parallel->user_context);
+		parallel->tasks[k] =
+		    parallel->enqueue_task(worker_task, 1, 1, &parallel->workers[k], parallel->user_context);
 	}
 }
 
@@ -162,9 +179,16 @@ void plait_parallel_for(plait_parallel *parallel, plait_range_fn *fn, void *cont
 	atomic_store_explicit(&parallel->done, 0, memory_order_relaxed);
 	parallel->generation = (parallel->generation + 1) & GENERATION_MASK;
 	parallel->generation = parallel->generation == 0 ? 1 : parallel->generation;
-	atomic_store_explicit(&parallel->ticket, pack_ticket(parallel->generation, chunks, 0),
-	                      memory_order_release);
-	run_chunks(parallel, parallel->generation);
+	/* Shares first, then the announcement: a worker that sees the new generation finds every
+	 * share ready. (One that reads a share early sees the old generation and claims nothing.) */
+	int workers = parallel->worker_count;
+	for (int k = 0; k < workers; ++k) {
+		int first = (int)((int64_t)chunks * k / workers), last = (int)((int64_t)chunks * (k + 1) / workers);
+		atomic_store_explicit(&parallel->shares[k].ticket, pack_ticket(parallel->generation, last, first),
+		                      memory_order_release);
+	}
+	atomic_store_explicit(&parallel->announce, parallel->generation, memory_order_release);
+	run_chunks(parallel, parallel->generation, 0);
 	int spins = 0;
 	while (atomic_load_explicit(&parallel->done, memory_order_acquire) < chunks) {
 		spin_wait(&spins);

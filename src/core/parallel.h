@@ -4,11 +4,13 @@
  * atomic ticket instead of one enqueue per loop (a frame has hundreds of loops, one per colour
  * of every constraint sweep).
  *
- * A loop is cut into chunks of `grain` items; the calling thread and the workers claim chunks
- * until none are left, and the loop returns when every chunk is done. Callers only pass loops
- * whose items are independent, so the result does not depend on who ran which chunk: output is
- * the same for any thread count. The calling thread can finish a loop alone, so a worker that
- * starts late only costs time.
+ * A loop is cut into chunks of `grain` items. Participant k (the calling thread is 0) owns the
+ * k-th of worker_count equal shares of the chunks and claims its own first, then takes what is
+ * left of the others' shares; the loop returns when every chunk is done. The same items thus
+ * tend to stay on the same core from one loop to the next, where their data is in cache. Callers only pass
+ * loops whose items are independent, so the result does not depend on who ran which chunk: output is the same
+ * for any thread count. The calling thread can finish a loop alone, so a worker that starts late only costs
+ * time.
  *
  * The contract for the task system is Box2D's: with worker_count > 1, each enqueued task must
  * start on a thread of its own without waiting for finish_task (the workers wait for loops
@@ -39,10 +41,20 @@ typedef struct plait_parallel {
 	void *context;
 	int begin, end, grain;
 
-	uint32_t generation;     /* of the current loop, never 0 once a loop was posted */
-	_Atomic uint64_t ticket; /* generation (24 bits) | chunk count (20) | next chunk (20) */
-	_Atomic int done;        /* chunks of the current loop finished */
+	uint32_t generation;       /* of the current loop, never 0 once a loop was posted */
+	_Atomic uint32_t announce; /* the generation workers wait for */
+	_Atomic int done;          /* chunks of the current loop finished */
 	_Atomic int quit;
+	struct plait_parallel_share {
+		/* generation (24 bits) | end of the share (20) | next chunk (20); a claim is a
+		 * compare-and-swap that also checks the generation, so a late worker cannot take a
+		 * chunk of a newer loop for an older one. */
+		_Alignas(64) _Atomic uint64_t ticket;
+	} shares[PLAIT_MAX_WORKERS];
+	struct plait_parallel_worker {
+		struct plait_parallel *parallel;
+		int index;
+	} workers[PLAIT_MAX_WORKERS];
 } plait_parallel;
 
 /* Task hooks as given in the world def; worker_count is clamped to [1, PLAIT_MAX_WORKERS] and
