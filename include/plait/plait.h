@@ -112,10 +112,10 @@ typedef struct plait_world_def {
 	float space_scale; /* metres per scene unit, > 0 (1) */
 	float time_scale;  /* simulated seconds per real second of frame time, > 0 (1) */
 	uint32_t seed;     /* seed of the wind noise (0) */
-	/* Vertices of any object against the triangles of other cloths (false). Experimental: it
-	 * keeps stacked sheets and particles on cloth apart, but cloths draped over each other on a
-	 * curved collider can still gain energy; see docs/architecture.md. Self-collision of a cloth
-	 * is its own flag, plait_cloth_def.self_collide. */
+	/* Cloths collide with other objects through their triangles: vertex-triangle and edge-edge
+	 * contacts with the other cloths, curves and particles, continuous, with a failsafe that
+	 * keeps them from passing through each other (true). Self-collision of a cloth is its own
+	 * flag, plait_cloth_def.self_collide. */
 	bool cloth_contacts;
 
 	plait_alloc_fn *alloc;
@@ -182,6 +182,10 @@ typedef struct plait_surface_def {
 	float stickiness; /* 0..1: share of separating normal velocity removed while touching (0) */
 	float bounce;     /* restitution, 0..1 (0) */
 	bool collide;     /* takes part in collisions (true) */
+	/* 0..1000 (0). Objects on one layer push each other; of two on different layers, the one on
+	 * the lower layer pushes the other but is not pushed back, as if it were a collider (an
+	 * inner garment under an outer one). */
+	int collision_layer;
 } plait_surface_def;
 
 /* A mesh as a polygon soup: vertex positions and faces of 3 or 4 (or more) vertices.
@@ -215,6 +219,15 @@ typedef enum plait_bend_model {
 	PLAIT_BEND_DISTANCE,
 } plait_bend_model;
 
+/* Which of a cloth's own primitives collide with each other when it self-collides (seed 000
+ * §4.5.1). Only PLAIT_SELF_COLLIDE_FULL_SURFACE promises that the cloth never passes through
+ * itself; the others are cheaper and leave gaps that substeps and thickness must cover. */
+typedef enum plait_self_collision_flag {
+	PLAIT_SELF_COLLIDE_FULL_SURFACE = 0, /* vertex-triangle and edge-edge */
+	PLAIT_SELF_COLLIDE_VERTEX_FACE,      /* vertex-triangle only */
+	PLAIT_SELF_COLLIDE_VERTEX,           /* vertex-vertex only, spheres of the thickness */
+} plait_self_collision_flag;
+
 typedef struct plait_cloth_def {
 	const char *name;
 	plait_mesh_def mesh;
@@ -239,10 +252,12 @@ typedef struct plait_cloth_def {
 	int shear_iterations;         /* as iterations, for shear (0: from shear_resistance) */
 	int bend_iterations;          /* as iterations, for bend (0: from bend_resistance) */
 	plait_tether_mode tethers;    /* (PLAIT_TETHER_NONE); built from the pins given here */
-	bool self_collide;      /* its vertices collide with its own triangles (false); pairs closer than the
-	                         * thickness in the rest shape keep their rest separation instead */
-	float tether_scale;     /* allowed distance / rest distance, 1..10 (1) */
-	float tether_stiffness; /* share of a tether's excess removed per pass, 0..1 (1) */
+	bool self_collide;            /* it collides with itself (false); pairs of its primitives closer than the
+	                               * self-collision thickness in the start shape are left to its constraints */
+	plait_self_collision_flag self_collision_flag; /* (PLAIT_SELF_COLLIDE_FULL_SURFACE) */
+	float self_collide_width_scale;                /* self-collision thickness / thickness, 0.01..100 (1) */
+	float tether_scale;                            /* allowed distance / rest distance, 1..10 (1) */
+	float tether_stiffness;                        /* share of a tether's excess removed per pass, 0..1 (1) */
 	plait_surface_def surface;
 	const int *pins; /* vertex indices held at their start position (targets settable later) */
 	int pin_count;
@@ -373,7 +388,11 @@ typedef struct plait_frame_stats {
 	float max_strain;      /* max |length/rest - 1| over stretch edges of all cloths and curves */
 	int penetrations;      /* vertices inside a collider (deeper than 1% of their radius) at frame end */
 	int nonfinite;         /* non-finite coordinates found at frame end */
-	int contacts;          /* collider and particle contacts resolved in the frame */
+	int contacts;          /* contacts resolved in the frame: with colliders, between particles, and
+	                        * between the primitives of meshes and curves */
+	int ccd_hits;          /* continuous tests that found primitives crossing within a substep */
+	int failsafe;          /* last-resort activations: impact zones made rigid, vertices frozen */
+	double collision_ms;   /* wall time spent in collisions (detection and response) in the frame */
 	int constraint_solves; /* constraint projections performed in the frame */
 } plait_frame_stats;
 

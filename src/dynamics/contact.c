@@ -5,7 +5,7 @@
 #include "collision/ccd.h"
 #include "collision/mesh_shape.h"
 #include "collision/particle_hash.h"
-#include "dynamics/surface_contact.h"
+#include "dynamics/mesh_contact.h"
 
 static plait_transform lerp_transform(plait_transform a, plait_transform b, float t)
 {
@@ -55,7 +55,7 @@ static vec3 contact_correction(vec3 normal, float depth, vec3 motion, float fric
  * not collide with each other here: self-collision of meshes works on their triangles. */
 static bool materials_pair_up(const plait_material *a, const plait_material *b)
 {
-	if (!a->collide || !b->collide) {
+	if (!a->collide || !b->collide || a->type == PLAIT_OBJECT_CLOTH || b->type == PLAIT_OBJECT_CLOTH) {
 		return false;
 	}
 	if (a->object != b->object) {
@@ -76,23 +76,26 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 		    (p->flags[i] & PLAIT_PARTICLE_ON_PLANE) ? (uint8_t)(flags | PLAIT_PARTICLE_SUPPORTED) : flags;
 	}
 	sim->pair_contact_count = 0;
+	if (!plait_mesh_contacts_prepare(sim, &sim->mesh_contacts_active)) {
+		return false;
+	}
+	plait_mesh_contacts_begin_substep(sim);
 
-	/* Particle pairs are needed when two colliding objects hold particles, or a particle object
-	 * collides with itself. */
+	/* Particle pairs are needed when two colliding curves or particle objects hold particles, or
+	 * a particle object collides with itself. (Cloths meet everything through their triangles:
+	 * mesh_contact.c.) */
 	int colliding_objects = 0, last_object = -1;
 	bool self_pairs = false;
 	for (int m = 0; m < sim->material_count; ++m) {
 		const plait_material *mat = &sim->materials[m];
-		if (!mat->collide || mat->type == PLAIT_OBJECT_COLLIDER) {
+		if (!mat->collide || mat->type == PLAIT_OBJECT_COLLIDER || mat->type == PLAIT_OBJECT_CLOTH) {
 			continue;
 		}
 		if (mat->object != last_object) {
 			++colliding_objects;
 			last_object = mat->object;
 		}
-		self_pairs =
-		    self_pairs ||
-		    ((mat->type == PLAIT_OBJECT_PARTICLES || mat->type == PLAIT_OBJECT_CLOTH) && mat->self_collide);
+		self_pairs = self_pairs || (mat->type == PLAIT_OBJECT_PARTICLES && mat->self_collide);
 	}
 	sim->particle_pairs_active = colliding_objects >= 2 || self_pairs;
 	if (!sim->particle_pairs_active) {
@@ -558,7 +561,9 @@ void plait_collide(plait_sim *sim)
 	 * pressing on the floor cannot push its bottom layer through it. */
 	if (sim->particle_pairs_active) {
 		contacts += collide_particle_pairs(sim);
-		contacts += plait_collide_surfaces(sim);
+	}
+	if (sim->mesh_contacts_active) {
+		contacts += plait_mesh_contacts_project(sim);
 	}
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
@@ -640,6 +645,7 @@ int plait_count_penetrations(const plait_sim *sim)
 
 void plait_contacts_destroy(plait_sim *sim)
 {
+	plait_mesh_contacts_destroy(sim);
 	if (sim->hash != NULL) {
 		plait_particle_hash_destroy(sim->hash, &sim->allocator);
 		plait_free(&sim->allocator, sim->hash);

@@ -36,7 +36,10 @@ typedef struct plait_material {
 	float point_area;                  /* m^2: cross-section used with point_drag */
 	float drag, tangential_drag, lift; /* cloth triangles */
 	bool collide;
-	bool self_collide; /* loose particles of this object collide with each other */
+	bool self_collide;      /* the object collides with itself */
+	int self_flag;          /* cloth: plait_self_collision_flag */
+	float self_width_scale; /* cloth: self-collision thickness / thickness */
+	int collision_layer;    /* see plait_surface_def */
 } plait_material;
 
 /* A particle's position and inverse mass in one 16-byte record, so that a constraint kernel
@@ -90,6 +93,7 @@ typedef struct plait_particles {
 	int *material;
 	uint8_t *flags;
 	vec3 *pin_start, *pin_end; /* pin targets at frame start and end */
+	vec3 *x_start;             /* position when the particle was added (start-frame separations) */
 	vec3 *contact_normal;      /* world normal of the last contact in this substep */
 	vec3 *contact_velocity;    /* velocity of the touched surface */
 	float *contact_bounce, *contact_stickiness;
@@ -224,6 +228,10 @@ typedef struct plait_sim {
 	plait_collider *colliders;
 	int surface_count, surface_capacity;
 	plait_surface *surfaces;
+	void *mesh_contacts;      /* plait_mesh_contacts, owned by mesh_contact.c */
+	bool mesh_contacts_dirty; /* objects came or went: rebuild the collision elements */
+	bool mesh_contacts_active;
+	bool mesh_contacts_dirty_objects; /* the particle -> collision object map needs a refresh */
 
 	/* Importance per kind, and whether it has work; the schedule is rebuilt when they change. */
 	int kind_importance[PLAIT_KIND_COUNT];
@@ -259,6 +267,9 @@ typedef struct plait_sim {
 	/* Per-frame counters. */
 	int contacts;
 	int constraint_solves;
+	int ccd_hits;
+	int failsafe;
+	double collision_seconds;
 } plait_sim;
 
 #endif

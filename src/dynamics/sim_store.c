@@ -48,6 +48,7 @@ static void free_particles(plait_sim *sim)
 	                  p->flags,
 	                  p->pin_start,
 	                  p->pin_end,
+	                  p->x_start,
 	                  p->contact_normal,
 	                  p->contact_velocity,
 	                  p->contact_bounce,
@@ -124,6 +125,7 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 	          grow_array(a, (void **)&p->flags, sizeof(uint8_t), n, capacity) &&
 	          grow_array(a, (void **)&p->pin_start, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->pin_end, sizeof(vec3), n, capacity) &&
+	          grow_array(a, (void **)&p->x_start, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->contact_normal, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->contact_velocity, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->contact_bounce, sizeof(float), n, capacity) &&
@@ -278,6 +280,7 @@ int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float m
 	p->flags[i] = flags;
 	p->pin_start[i] = position;
 	p->pin_end[i] = position;
+	p->x_start[i] = position;
 	return i;
 }
 
@@ -337,6 +340,7 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		p->flags[kept] = p->flags[i];
 		p->pin_start[kept] = p->pin_start[i];
 		p->pin_end[kept] = p->pin_end[i];
+		p->x_start[kept] = p->x_start[i];
 		++kept;
 	}
 	p->count = kept;
@@ -410,5 +414,20 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 	}
 	aero->count = aero_kept;
 	plait_free(&sim->allocator, remap);
+	return true;
+}
+
+bool plait_sim_reserve_surfaces(plait_sim *sim, int count)
+{
+	int needed = sim->surface_count + count;
+	if (needed <= sim->surface_capacity) {
+		return true;
+	}
+	int capacity = next_capacity(sim->surface_capacity, needed);
+	if (!grow_array(&sim->allocator, (void **)&sim->surfaces, sizeof *sim->surfaces, sim->surface_count,
+	                capacity)) {
+		return false;
+	}
+	sim->surface_capacity = capacity;
 	return true;
 }

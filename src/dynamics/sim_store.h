@@ -28,4 +28,7 @@ void plait_sim_add_distance(plait_distance_block *block, int i, int j, float res
  * renumbers the rest; materials and colliders of the object are removed by the caller. */
 bool plait_sim_compact(plait_sim *sim, const bool *keep);
 
+/* Room for `count` more cloth surfaces. */
+bool plait_sim_reserve_surfaces(plait_sim *sim, int count);
+
 #endif

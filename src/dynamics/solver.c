@@ -2,12 +2,14 @@
 
 #include <string.h>
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/float_mode.h"
 #include "dynamics/air.h"
 #include "dynamics/colouring.h"
 #include "dynamics/constraints.h"
 #include "dynamics/contact.h"
+#include "dynamics/mesh_contact.h"
 
 const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "tether", "collision"};
 
@@ -131,9 +133,12 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		plait_solve_tethers(&sim->tether, &sim->particles, &sim->parallel);
 		sim->constraint_solves += sim->tether.count;
 		break;
-	case PLAIT_KIND_COLLISION:
+	case PLAIT_KIND_COLLISION: {
+		double start = plait_seconds();
 		plait_collide(sim);
+		sim->collision_seconds += plait_seconds() - start;
 		break;
+	}
 	case PLAIT_KIND_COUNT:
 		break;
 	}
@@ -195,6 +200,12 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 			run_event(sim, (plait_kind)sim->schedule_kinds[k], inverse_h_squared, sweep);
 		}
 
+		/* The substep must not end with anything passed through anything. */
+		if (sim->mesh_contacts_active) {
+			double start = plait_seconds();
+			plait_mesh_contacts_failsafe(sim);
+			sim->collision_seconds += plait_seconds() - start;
+		}
 		plait_parallel_for(&sim->parallel, update_velocities_range, &job, 0, sim->particles.count,
 		                   PARTICLE_GRAIN);
 		plait_contacts_end_substep(sim);
@@ -213,6 +224,9 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 	plait_particles *p = &sim->particles;
 	sim->contacts = 0;
 	sim->constraint_solves = 0;
+	sim->ccd_hits = 0;
+	sim->failsafe = 0;
+	sim->collision_seconds = 0.0;
 	sim->largest_radius = 0.0f;
 	for (int i = 0; i < p->count; ++i) {
 		sim->largest_radius = plait_maxf(sim->largest_radius, p->radius[i]);

@@ -20,7 +20,6 @@
 #include "dynamics/constraints.h"
 #include "collision/mesh_shape.h"
 #include "dynamics/sim_store.h"
-#include "dynamics/surface_contact.h"
 #include "world/bend_pairs.h"
 #include "world/tethers.h"
 #include "world/world.h"
@@ -54,7 +53,9 @@ static plait_result check_surface(plait_error *error, const char *object, const 
 	if ((r = check_range(error, object, "thickness", s->thickness, 0.0f, 1e6f)) != PLAIT_OK ||
 	    (r = check_range(error, object, "friction", s->friction, 0.0f, 10.0f)) != PLAIT_OK ||
 	    (r = check_range(error, object, "stickiness", s->stickiness, 0.0f, 1.0f)) != PLAIT_OK ||
-	    (r = check_range(error, object, "bounce", s->bounce, 0.0f, 1.0f)) != PLAIT_OK) {
+	    (r = check_range(error, object, "bounce", s->bounce, 0.0f, 1.0f)) != PLAIT_OK ||
+	    (r = check_range(error, object, "collision_layer", (float)s->collision_layer, 0.0f, 1000.0f)) !=
+	        PLAIT_OK) {
 		return r;
 	}
 	return PLAIT_OK;
@@ -147,6 +148,8 @@ static int add_material(plait_sim *sim, int object, plait_object_type type, cons
 	mat->stickiness = surface->stickiness;
 	mat->bounce = surface->bounce;
 	mat->collide = surface->collide;
+	mat->collision_layer = surface->collision_layer;
+	mat->self_width_scale = 1.0f;
 	mat->damp = damp;
 	return m;
 }
@@ -206,8 +209,16 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	    check_range(error, label, "lift", def->lift, 0.0f, 1e6f) != PLAIT_OK ||
 	    check_range(error, label, "tether_scale", def->tether_scale, 1.0f, 10.0f) != PLAIT_OK ||
 	    check_range(error, label, "tether_stiffness", def->tether_stiffness, 0.0f, 1.0f) != PLAIT_OK ||
+	    check_range(error, label, "self_collide_width_scale", def->self_collide_width_scale, 0.01f, 100.0f) !=
+	        PLAIT_OK ||
 	    check_surface(error, label, &def->surface) != PLAIT_OK ||
 	    check_pins(error, label, def->pins, def->pin_count, mesh->vertex_count) != PLAIT_OK) {
+		return id;
+	}
+	if (def->self_collision_flag < PLAIT_SELF_COLLIDE_FULL_SURFACE ||
+	    def->self_collision_flag > PLAIT_SELF_COLLIDE_VERTEX) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown self-collision flag %d", label,
+		                (int)def->self_collision_flag);
 		return id;
 	}
 	if (def->tethers < PLAIT_TETHER_NONE || def->tethers > PLAIT_TETHER_GEODESIC) {
@@ -314,6 +325,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	mat->tangential_drag = def->tangential_drag;
 	mat->lift = def->lift;
 	mat->self_collide = def->self_collide;
+	mat->self_flag = (int)def->self_collision_flag;
+	mat->self_width_scale = def->self_collide_width_scale;
 	object->material = material;
 	object->first_particle = sim->particles.count;
 	object->particle_count = vertex_count;

@@ -11,6 +11,7 @@ static plait_surface_def default_surface(float thickness)
 	surface.stickiness = 0.0f;
 	surface.bounce = 0.0f;
 	surface.collide = true;
+	surface.collision_layer = 0;
 	return surface;
 }
 
@@ -29,6 +30,8 @@ plait_cloth_def plait_default_cloth_def(void)
 	def.lift = 0.05f;
 	def.tether_scale = 1.0f;
 	def.tether_stiffness = 1.0f;
+	def.self_collision_flag = PLAIT_SELF_COLLIDE_FULL_SURFACE;
+	def.self_collide_width_scale = 1.0f;
 	def.surface = default_surface(0.01f);
 	return def;
 }

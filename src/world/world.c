@@ -26,6 +26,7 @@ plait_world_def plait_default_world_def(void)
 	def.wind.direction = (plait_vec3){1.0f, 0.0f, 0.0f};
 	def.space_scale = 1.0f;
 	def.time_scale = 1.0f;
+	def.cloth_contacts = true;
 	def.worker_count = 1;
 	def.internal_value = PLAIT_DEF_MAGIC;
 	return def;
@@ -236,6 +237,9 @@ plait_result plait_world_step(plait_world_id id, plait_error *error)
 	plait_result result = plait_sim_step(&world->sim, error);
 	/* Counters of the frame; the measures of the state are taken when someone asks. */
 	world->stats.contacts = world->sim.contacts;
+	world->stats.ccd_hits = world->sim.ccd_hits;
+	world->stats.failsafe = world->sim.failsafe;
+	world->stats.collision_ms = 1e3 * world->sim.collision_seconds;
 	world->stats.constraint_solves = world->sim.constraint_solves;
 	return result;
 }
@@ -325,6 +329,7 @@ void plait_world_update_kinds(plait_world *world)
 		}
 	}
 	sim->colouring_dirty = true; /* objects came or went: colour the constraints again */
+	sim->mesh_contacts_dirty = true;
 	sim->kind_active[PLAIT_KIND_STRETCH] = sim->stretch.count > 0;
 	sim->kind_active[PLAIT_KIND_SHEAR] = sim->shear.count > 0;
 	sim->kind_active[PLAIT_KIND_BEND] = sim->bend.count + sim->bend_distance.count + sim->rod_bend.count > 0;

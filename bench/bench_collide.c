@@ -1,0 +1,154 @@
+/* collide: the collision scenes of issue #3 (tests/support/collide_scenes.h) at full size,
+ * through the public API, with the intersection checker run on every frame.
+ *
+ * For each scene and run: ms/frame (median of the runs, checker time excluded), the share of
+ * it spent in collisions (plait_frame_stats.collision_ms), and over all frames: the most
+ * crossing triangle pairs in a frame, the frames with any, the most vertices inside colliders,
+ * CCD hits and failsafe activations; at the end, stacked cloths out of order. One line per run:
+ *
+ *   scene=pile n=64 threads=1 ms=12.3 collision=0.41 worst_crossings=0 crossing_frames=0 ...
+ *
+ * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
+ *   SCENE: drape thin-box pile twist arm hang-self (default: all)
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "collide_scenes.h"
+
+#ifdef PLAIT_BENCH_HAVE_POOL
+#include "thread_pool.h"
+#endif
+
+static double now_seconds(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return x < y ? -1 : x > y;
+}
+
+typedef struct run_result {
+	double ms, collision_ms;
+	int worst_crossings, crossing_frames, worst_inside, ccd_hits, failsafe, order_violations;
+	int frames;
+	bool failed;
+} run_result;
+
+static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check)
+{
+	run_result r = {0};
+	plait_world_def def = plait_default_world_def();
+#ifdef PLAIT_BENCH_HAVE_POOL
+	plait_thread_pool *pool = threads > 1 ? plait_thread_pool_create(threads) : NULL;
+	if (pool != NULL) {
+		plait_thread_pool_attach(pool, &def);
+	}
+#else
+	(void)threads;
+#endif
+	collide_scene scene;
+	plait_error error;
+	if (!collide_scene_create(&scene, kind, n, &def, &error)) {
+		fprintf(stderr, "bench_collide: %s: %s\n", collide_scene_names[kind], error.message);
+		exit(1);
+	}
+	r.frames = frames > 0 ? frames : scene.frames;
+	double stepping = 0.0;
+	for (int f = 0; f < r.frames; ++f) {
+		double start = now_seconds();
+		if (collide_scene_step(&scene, &error) != PLAIT_OK) {
+			fprintf(stderr, "bench_collide: %s frame %d: %s\n", collide_scene_names[kind], f + 1,
+			        error.message);
+			r.failed = true;
+			break;
+		}
+		stepping += now_seconds() - start;
+		plait_frame_stats stats = plait_world_get_stats(scene.world);
+		r.collision_ms += stats.collision_ms;
+		r.ccd_hits += stats.ccd_hits;
+		r.failsafe += stats.failsafe;
+		if (check) {
+			plait_intersection_report report;
+			plait_world_check_intersections(scene.world, &report, NULL);
+			r.crossing_frames += report.triangle_pairs > 0;
+			if (report.triangle_pairs > r.worst_crossings) {
+				r.worst_crossings = report.triangle_pairs;
+			}
+			if (report.inside_colliders > r.worst_inside) {
+				r.worst_inside = report.inside_colliders;
+			}
+		}
+	}
+	r.ms = 1e3 * stepping / r.frames;
+	r.collision_ms /= r.frames;
+	r.order_violations = collide_scene_order_violations(&scene);
+	collide_scene_destroy(&scene);
+#ifdef PLAIT_BENCH_HAVE_POOL
+	if (pool != NULL) {
+		plait_thread_pool_destroy(pool);
+	}
+#endif
+	return r;
+}
+
+int main(int argc, char **argv)
+{
+	bool chosen[SCENE_COUNT] = {false}, any = false, check = true;
+	int n = 0, frames = 0, runs = 1, threads = 1;
+	for (int a = 1; a < argc; ++a) {
+		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
+			n = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--frames") == 0 && a + 1 < argc) {
+			frames = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--runs") == 0 && a + 1 < argc) {
+			runs = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--threads") == 0 && a + 1 < argc) {
+			threads = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--no-check") == 0) {
+			check = false;
+		} else {
+			int k = 0;
+			while (k < SCENE_COUNT && strcmp(argv[a], collide_scene_names[k]) != 0) {
+				++k;
+			}
+			if (k == SCENE_COUNT || runs < 1) {
+				fprintf(stderr,
+				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
+				        "[--no-check]\n  SCENE: drape thin-box pile twist arm hang-self\n");
+				return 2;
+			}
+			chosen[k] = any = true;
+		}
+	}
+	int failures = 0;
+	for (int k = 0; k < SCENE_COUNT; ++k) {
+		if (any && !chosen[k]) {
+			continue;
+		}
+		double *ms = malloc(sizeof(double) * (size_t)runs);
+		run_result last = {0};
+		for (int r = 0; r < runs; ++r) {
+			last = run((collide_scene_kind)k, n, frames, threads, check);
+			ms[r] = last.ms;
+		}
+		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
+		printf(
+		    "scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d crossing_frames=%d "
+		    "worst_inside=%d order_violations=%d ccd_hits=%d failsafe=%d%s\n",
+		    collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
+		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.order_violations,
+		    last.ccd_hits, last.failsafe, last.failed ? " FAILED" : "");
+		fflush(stdout);
+		failures += last.failed;
+		free(ms);
+	}
+	return failures > 0;
+}

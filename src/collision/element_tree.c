@@ -1,0 +1,204 @@
+#include "collision/element_tree.h"
+
+#include <string.h>
+
+#define LEAF_SIZE 4
+
+void plait_element_tree_destroy(plait_element_tree *tree, const plait_allocator *allocator)
+{
+	plait_free(allocator, tree->nodes);
+	plait_free(allocator, tree->order);
+	memset(tree, 0, sizeof *tree);
+}
+
+static float axis_value(vec3 v, int axis)
+{
+	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
+}
+
+/* Stable bottom-up merge sort of order[0, count) by centre along axis (ties by index), so the
+ * tree never depends on a library sort's tie-breaking. */
+static void sort_by_axis(int *order, int count, const vec3 *centre, int axis, int *scratch)
+{
+	for (int width = 1; width < count; width *= 2) {
+		for (int start = 0; start < count; start += 2 * width) {
+			int middle = start + width < count ? start + width : count;
+			int end = start + 2 * width < count ? start + 2 * width : count;
+			int i = start, j = middle, k = start;
+			while (i < middle && j < end) {
+				float a = axis_value(centre[order[i]], axis), b = axis_value(centre[order[j]], axis);
+				scratch[k++] = (b < a || (b == a && order[j] < order[i])) ? order[j++] : order[i++];
+			}
+			while (i < middle) {
+				scratch[k++] = order[i++];
+			}
+			while (j < end) {
+				scratch[k++] = order[j++];
+			}
+		}
+		memcpy(order, scratch, sizeof(int) * (size_t)count);
+	}
+}
+
+/* Builds node `node` over order[first, first + count) and its subtree; returns the next free
+ * node index and raises *depth to the subtree's depth. */
+static int build_node(plait_element_tree *tree, const vec3 *centre, int *scratch, int node, int first,
+                      int count, int next_free, int level, int *depth)
+{
+	plait_tree_node *n = &tree->nodes[node];
+	if (level > *depth) {
+		*depth = level;
+	}
+	if (count <= LEAF_SIZE) {
+		n->first = first;
+		n->count = count;
+		return next_free;
+	}
+	vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
+	for (int k = first; k < first + count; ++k) {
+		lower = v3_min(lower, centre[tree->order[k]]);
+		upper = v3_max(upper, centre[tree->order[k]]);
+	}
+	vec3 extent = v3_sub(upper, lower);
+	int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+	sort_by_axis(tree->order + first, count, centre, axis, scratch);
+	int left = next_free;
+	n->first = left;
+	n->count = 0;
+	int half = count / 2;
+	next_free = build_node(tree, centre, scratch, left, first, half, next_free + 2, level + 1, depth);
+	return build_node(tree, centre, scratch, left + 1, first + half, count - half, next_free, level + 1,
+	                  depth);
+}
+
+bool plait_element_tree_build(plait_element_tree *tree, const plait_allocator *allocator, const vec3 *centres,
+                              int count)
+{
+	plait_element_tree_destroy(tree, allocator);
+	if (count <= 0) {
+		return true;
+	}
+	int capacity = 2 * count; /* a binary tree with leaves of at least one element */
+	tree->nodes = plait_alloc_zero(allocator, (size_t)capacity, sizeof *tree->nodes);
+	tree->order = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
+	int *scratch = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
+	if (tree->nodes == NULL || tree->order == NULL || scratch == NULL) {
+		plait_free(allocator, scratch);
+		plait_element_tree_destroy(tree, allocator);
+		return false;
+	}
+	for (int k = 0; k < count; ++k) {
+		tree->order[k] = k;
+	}
+	int depth = 0;
+	tree->node_count = build_node(tree, centres, scratch, 0, 0, count, 1, 0, &depth);
+	tree->element_count = count;
+	plait_free(allocator, scratch);
+	return true;
+}
+
+void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const vec3 *upper)
+{
+	for (int n = tree->node_count - 1; n >= 0; --n) {
+		plait_tree_node *node = &tree->nodes[n];
+		if (node->count > 0) {
+			vec3 l = lower[tree->order[node->first]], u = upper[tree->order[node->first]];
+			for (int k = node->first + 1; k < node->first + node->count; ++k) {
+				l = v3_min(l, lower[tree->order[k]]);
+				u = v3_max(u, upper[tree->order[k]]);
+			}
+			node->lower = l;
+			node->upper = u;
+		} else {
+			const plait_tree_node *a = &tree->nodes[node->first], *b = &tree->nodes[node->first + 1];
+			node->lower = v3_min(a->lower, b->lower);
+			node->upper = v3_max(a->upper, b->upper);
+		}
+	}
+}
+
+static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub)
+{
+	return la.x <= ub.x && lb.x <= ua.x && la.y <= ub.y && lb.y <= ua.y && la.z <= ub.z && lb.z <= ua.z;
+}
+
+/* Median splits halve the element count at every level, so no tree is deeper than 32 levels;
+ * a depth-first pair traversal adds at most two pending pairs per level of either tree. */
+#define STACK_PAIRS 160
+
+static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *a, const vec3 *lower_a,
+                       const vec3 *upper_a, const plait_element_tree *tree_b, const plait_tree_node *b,
+                       const vec3 *lower_b, const vec3 *upper_b, plait_element_pair_visitor *visit,
+                       void *context)
+{
+	bool same = a == b;
+	for (int i = a->first; i < a->first + a->count; ++i) {
+		int ei = tree_a->order[i];
+		for (int j = same ? i + 1 : b->first; j < b->first + b->count; ++j) {
+			int ej = tree_b->order[j];
+			if (boxes_overlap(lower_a[ei], upper_a[ei], lower_b[ej], upper_b[ej])) {
+				visit(ei, ej, context);
+			}
+		}
+	}
+}
+
+/* The traversal for both queries: `self` when the two trees are one. */
+static void traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
+                     const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
+                     plait_element_pair_visitor *visit, void *context)
+{
+	if (tree_a->node_count == 0 || tree_b->node_count == 0) {
+		return;
+	}
+	int stack[2 * STACK_PAIRS];
+	int top = 0;
+	stack[top++] = 0;
+	stack[top++] = 0;
+	while (top > 0) {
+		int nb = stack[--top], na = stack[--top];
+		const plait_tree_node *a = &tree_a->nodes[na], *b = &tree_b->nodes[nb];
+		bool same = self && na == nb;
+		if (!same && !boxes_overlap(a->lower, a->upper, b->lower, b->upper)) {
+			continue;
+		}
+		if (a->count > 0 && b->count > 0) {
+			leaf_pairs(tree_a, a, lower_a, upper_a, tree_b, b, lower_b, upper_b, visit, context);
+			continue;
+		}
+		/* Pairs pushed in reverse so they pop in a fixed, natural order. */
+		if (same) {
+			int l = a->first, r = a->first + 1;
+			int pushes[3][2] = {{r, r}, {l, r}, {l, l}};
+			for (int k = 0; k < 3; ++k) {
+				stack[top++] = pushes[k][0];
+				stack[top++] = pushes[k][1];
+			}
+		} else if (b->count > 0 || (a->count == 0 && na <= nb)) {
+			/* Split the inner node (the shallower one when both are inner: a balanced descent). */
+			stack[top++] = a->first + 1;
+			stack[top++] = nb;
+			stack[top++] = a->first;
+			stack[top++] = nb;
+		} else {
+			stack[top++] = na;
+			stack[top++] = b->first + 1;
+			stack[top++] = na;
+			stack[top++] = b->first;
+		}
+	}
+}
+
+void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                              plait_element_pair_visitor *visit, void *context)
+{
+	traverse(tree, lower, upper, tree, lower, upper, true, visit, context);
+}
+
+void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
+                                      const vec3 *upper_a, const plait_element_tree *tree_b,
+                                      const vec3 *lower_b, const vec3 *upper_b,
+                                      plait_element_pair_visitor *visit, void *context)
+{
+	traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, visit, context);
+}

@@ -1,0 +1,50 @@
+/* A bounding volume hierarchy (axis-aligned boxes) over the collision elements of deforming
+ * objects: triangles, edges or points whose vertices move every substep. The tree's shape is
+ * built once from the elements' positions (median splits), and only its boxes change after
+ * that: they are refitted from the elements' boxes whenever the caller asks, which stays cheap
+ * and good as long as the objects do not tear apart. Rebuild when the topology changes.
+ *
+ * The pair query is a self-traversal: every pair of elements whose boxes overlap is reported
+ * once, in an order fixed by the tree (deterministic). */
+#ifndef PLAIT_COLLISION_ELEMENT_TREE_H
+#define PLAIT_COLLISION_ELEMENT_TREE_H
+
+#include "core/alloc.h"
+#include "core/math.h"
+
+typedef struct plait_tree_node {
+	vec3 lower, upper;
+	int first; /* leaf: first entry in order; inner: left child (right is left + 1) */
+	int count; /* leaf: element count; inner: 0 */
+} plait_tree_node;
+
+typedef struct plait_element_tree {
+	int element_count;
+	int node_count;
+	plait_tree_node *nodes; /* parents before children */
+	int *order;             /* elements in leaf order */
+} plait_element_tree;
+
+/* Builds the tree's shape over `count` elements from their centres. Returns false when out of
+ * memory (the tree is then empty). */
+bool plait_element_tree_build(plait_element_tree *tree, const plait_allocator *allocator, const vec3 *centres,
+                              int count);
+void plait_element_tree_destroy(plait_element_tree *tree, const plait_allocator *allocator);
+
+/* Sets every node's box from the elements' boxes (indexed by element). */
+void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const vec3 *upper);
+
+/* Calls visit(a, b, context) once for every pair of distinct elements whose boxes overlap;
+ * a < b is not promised. Uses the boxes given to the last refit. */
+typedef void plait_element_pair_visitor(int a, int b, void *context);
+void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                              plait_element_pair_visitor *visit, void *context);
+
+/* As above between two trees: visit(a, b) with a an element of tree_a, b one of tree_b (each
+ * in its own tree's numbering, boxes from its own arrays). */
+void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
+                                      const vec3 *upper_a, const plait_element_tree *tree_b,
+                                      const vec3 *lower_b, const vec3 *upper_b,
+                                      plait_element_pair_visitor *visit, void *context);
+
+#endif

@@ -1,0 +1,1503 @@
+#include "dynamics/mesh_contact.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "collision/ccd.h"
+#include "collision/closest.h"
+#include "collision/element_tree.h"
+#include "collision/mesh_shape.h"
+
+/* Primitive pairs. The first primitive's vertices come first in v[]. */
+typedef enum pair_type {
+	PAIR_VERTEX_FACE = 0, /* v[0] against triangle v[1..3] */
+	PAIR_EDGE_EDGE,       /* v[0]-v[1] against v[2]-v[3] */
+	PAIR_VERTEX_EDGE,     /* v[0] against v[1]-v[2] */
+	PAIR_VERTEX_VERTEX,   /* v[0] against v[1] */
+} pair_type;
+
+static const int pair_size[4] = {4, 4, 3, 2};
+
+/* A collision element: a triangle of a cloth, a segment of a curve, or a loose particle. Each
+ * vertex and each edge is tested by exactly one element, its owner (the first element that has
+ * it): a pair of primitives is then met once, through the pair of their owners, whose boxes
+ * hold the primitives' boxes. */
+typedef struct element {
+	int v[3];
+	int material;
+	uint8_t size;         /* vertices: 1, 2 or 3 */
+	uint8_t own_vertices; /* bit k: v[k] */
+	uint8_t own_edges;    /* bit k: edge v[k] - v[(k + 1) % size] (a segment has one) */
+} element;
+
+/* The elements of one object, with their own tree: objects meet pairwise through their trees,
+ * and only an object that collides with itself is traversed against itself. */
+typedef struct collision_object {
+	int first, count; /* its elements */
+	int material;
+	bool self;
+	plait_element_tree tree;
+} collision_object;
+
+typedef struct contact_pair {
+	int v[4];
+	uint8_t type;
+	uint8_t self;
+	float distance; /* contact distance, scene units */
+	float friction;
+	float side;     /* vertex-face: which side of the triangle's plane the vertex is on (+1, -1) */
+	vec3 direction; /* the others: unit vector from the second primitive to the first */
+	float scale[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
+	float lower;    /* rest pairs: a lower bound of their distance now, < 0 when unknown */
+} contact_pair;
+
+typedef struct plait_mesh_contacts {
+	int element_count;
+	element *elements;
+	float *element_reach; /* how far an element's contacts reach beyond it: its largest radius,
+	                       * scaled for self-collision */
+	vec3 *lower, *upper;  /* element boxes */
+	int object_count;
+	collision_object *objects;
+	/* Neighbours in the start shape. Within a self-colliding object, primitives closer than
+	 * their self-collision distance at the start (seed 000 §4.5) never push each other: that is
+	 * left to the object's own constraints. They may still not pass through each other: they
+	 * are the rest pairs, swept by the failsafe in every substep. Element pairs all of whose
+	 * primitive pairs share a vertex or are rest pairs are excluded whole: per element, a
+	 * sorted run of excluded_list from excluded_start[e] to excluded_start[e + 1]. */
+	int rest_count, rest_capacity;
+	struct contact_pair *rest_pairs;
+	int *excluded_start;
+	int *excluded_list;
+	bool active;
+	bool gathered;   /* the candidates of this substep are ready */
+	bool list_valid; /* the list of the last gather may serve again (see list_covers) */
+	int pair_count, pair_capacity;
+	contact_pair *pairs;
+	bool out_of_memory; /* the candidate list could not grow: a contact may be left to the failsafe */
+	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
+	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
+	 * long as no vertex is farther than its guard from where it was then (list_covers). */
+	vec3 *x_gather;
+	float *guard;     /* per particle: how far it may move relative to its object */
+	int *object_of;   /* per particle: its collision object, or -1 */
+	vec3 *shift;      /* per collision object: mean motion since the gather (scratch) */
+	float *allowance; /* per pair of objects: how far they may move relative to each other */
+	float allowance_max;
+	/* Failsafe scratch: union-find over particles, and the particles it touched. */
+	int particle_capacity;
+	int *zone_parent;
+	int *touched;
+	int touched_count;
+	int (*members)[2]; /* (root, particle), sorted to walk zone by zone */
+} plait_mesh_contacts;
+
+/* ---- Building the elements --------------------------------------------------------------- */
+
+typedef struct edge_key {
+	int low, high, element, k;
+} edge_key;
+
+static int compare_edges(const void *a, const void *b)
+{
+	const edge_key *x = a, *y = b;
+	if (x->low != y->low) {
+		return x->low < y->low ? -1 : 1;
+	}
+	if (x->high != y->high) {
+		return x->high < y->high ? -1 : 1;
+	}
+	if (x->element != y->element) {
+		return x->element < y->element ? -1 : 1;
+	}
+	return x->k < y->k ? -1 : x->k > y->k;
+}
+
+static void free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
+{
+	plait_free(a, mc->elements);
+	plait_free(a, mc->element_reach);
+	plait_free(a, mc->lower);
+	plait_free(a, mc->upper);
+	for (int k = 0; k < mc->object_count; ++k) {
+		plait_element_tree_destroy(&mc->objects[k].tree, a);
+	}
+	plait_free(a, mc->objects);
+	plait_free(a, mc->shift);
+	plait_free(a, mc->allowance);
+	mc->shift = NULL;
+	mc->allowance = NULL;
+	plait_free(a, mc->excluded_start);
+	plait_free(a, mc->excluded_list);
+	plait_free(a, mc->rest_pairs);
+	mc->rest_pairs = NULL;
+	mc->rest_count = mc->rest_capacity = 0;
+	mc->excluded_start = mc->excluded_list = NULL;
+	mc->objects = NULL;
+	mc->object_count = 0;
+	mc->elements = NULL;
+	mc->element_reach = NULL;
+	mc->lower = mc->upper = NULL;
+	mc->element_count = 0;
+}
+
+static bool material_collides(const plait_sim *sim, int material)
+{
+	return sim->materials[material].collide;
+}
+
+static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc);
+
+static bool excluded(const plait_mesh_contacts *mc, int a, int b)
+{
+	if (mc->excluded_start == NULL) {
+		return false;
+	}
+	for (int k = mc->excluded_start[a]; k < mc->excluded_start[a + 1]; ++k) {
+		if (mc->excluded_list[k] >= b) {
+			return mc->excluded_list[k] == b;
+		}
+	}
+	return false;
+}
+
+static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_allocator *a = &sim->allocator;
+	plait_particles *p = &sim->particles;
+	free_elements(mc, a);
+	mc->active = false;
+	/* Triangles of cloths, then the particles of no surface (curves' vertices, loose ones). */
+	int triangles = 0;
+	for (int s = 0; s < sim->surface_count; ++s) {
+		if (material_collides(sim, sim->surfaces[s].material)) {
+			triangles += sim->surfaces[s].shape->triangle_count;
+		}
+	}
+	if (triangles == 0) {
+		return true; /* points alone meet as particle pairs (contact.c) */
+	}
+	bool *in_surface = plait_alloc_zero(a, (size_t)(p->count > 0 ? p->count : 1), sizeof(bool));
+	if (in_surface == NULL) {
+		return false;
+	}
+	for (int s = 0; s < sim->surface_count; ++s) {
+		for (int k = 0; k < sim->surfaces[s].shape->vertex_count; ++k) {
+			in_surface[sim->surfaces[s].first + k] = true;
+		}
+	}
+	int points = 0;
+	for (int i = 0; i < p->count; ++i) {
+		points += !in_surface[i] && (p->flags[i] & PLAIT_PARTICLE_COLLIDE) &&
+		          material_collides(sim, p->material[i]);
+	}
+	int count = triangles + points;
+	mc->elements = plait_alloc_zero(a, (size_t)count, sizeof *mc->elements);
+	mc->element_reach = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	edge_key *edges = plait_alloc_zero(a, (size_t)triangles * 3, sizeof *edges);
+	bool *owned = plait_alloc_zero(a, (size_t)p->count, sizeof(bool));
+	/* At most one object per surface and one per particle run. */
+	mc->objects = plait_alloc_zero(a, (size_t)(sim->surface_count + points), sizeof *mc->objects);
+	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->lower != NULL && mc->upper != NULL &&
+	          edges != NULL && owned != NULL && mc->objects != NULL;
+	if (ok) {
+		int e = 0, edge_count = 0;
+		for (int s = 0; s < sim->surface_count; ++s) {
+			const plait_surface *surface = &sim->surfaces[s];
+			if (!material_collides(sim, surface->material)) {
+				continue;
+			}
+			const plait_material *m = &sim->materials[surface->material];
+			mc->objects[mc->object_count++] = (collision_object){
+			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}};
+			for (int t = 0; t < surface->shape->triangle_count; ++t, ++e) {
+				element *el = &mc->elements[e];
+				el->size = 3;
+				el->material = surface->material;
+				for (int k = 0; k < 3; ++k) {
+					el->v[k] = surface->first + surface->shape->triangles[t][k];
+				}
+				for (int k = 0; k < 3; ++k) {
+					int i = el->v[k], j = el->v[(k + 1) % 3];
+					edges[edge_count++] = (edge_key){i < j ? i : j, i < j ? j : i, e, k};
+					if (!owned[i]) {
+						owned[i] = true;
+						el->own_vertices |= (uint8_t)(1u << k);
+					}
+				}
+			}
+		}
+		for (int i = 0; i < p->count; ++i) {
+			if (!in_surface[i] && (p->flags[i] & PLAIT_PARTICLE_COLLIDE) &&
+			    material_collides(sim, p->material[i])) {
+				collision_object *last = mc->object_count > 0 ? &mc->objects[mc->object_count - 1] : NULL;
+				if (last == NULL || last->material != p->material[i] || last->first + last->count != e) {
+					/* Loose points never meet their own kind here (particle pairs do). */
+					mc->objects[mc->object_count++] = (collision_object){e, 0, p->material[i], false, {0}};
+					last = &mc->objects[mc->object_count - 1];
+				}
+				last->count += 1;
+				element *el = &mc->elements[e++];
+				el->size = 1;
+				el->material = p->material[i];
+				el->v[0] = el->v[1] = el->v[2] = i;
+				el->own_vertices = 1;
+			}
+		}
+		qsort(edges, (size_t)edge_count, sizeof *edges, compare_edges);
+		for (int k = 0; k < edge_count; ++k) {
+			if (k == 0 || edges[k].low != edges[k - 1].low || edges[k].high != edges[k - 1].high) {
+				mc->elements[edges[k].element].own_edges |= (uint8_t)(1u << edges[k].k);
+			}
+		}
+		mc->element_count = count;
+		/* Each object's tree, shaped from the current positions. */
+		vec3 *centres = mc->lower;
+		for (int k = 0; k < count; ++k) {
+			const element *el = &mc->elements[k];
+			vec3 c = {0.0f, 0.0f, 0.0f};
+			for (int m = 0; m < el->size; ++m) {
+				c = v3_add(c, p->point[el->v[m]].x);
+			}
+			centres[k] = v3_scale(c, 1.0f / (float)el->size);
+		}
+		for (int k = 0; k < mc->object_count && ok; ++k) {
+			collision_object *o = &mc->objects[k];
+			ok = plait_element_tree_build(&o->tree, a, centres + o->first, o->count);
+		}
+		ok = ok && build_rest_pairs(sim, mc);
+		int objects = mc->object_count;
+		mc->shift = plait_alloc_zero(a, (size_t)objects, sizeof(vec3));
+		mc->allowance = plait_alloc_zero(a, (size_t)(objects * objects), sizeof(float));
+		ok = ok && mc->shift != NULL && mc->allowance != NULL;
+	}
+	plait_free(a, edges);
+	plait_free(a, owned);
+	plait_free(a, in_surface);
+	if (!ok) {
+		free_elements(mc, a);
+		return false;
+	}
+	mc->active = true;
+	return true;
+}
+
+static bool reserve_particles(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	int count = sim->particles.count;
+	if (mc->particle_capacity >= count) {
+		return true;
+	}
+	const plait_allocator *a = &sim->allocator;
+	plait_free(a, mc->zone_parent);
+	plait_free(a, mc->touched);
+	plait_free(a, mc->members);
+	plait_free(a, mc->x_gather);
+	plait_free(a, mc->guard);
+	plait_free(a, mc->object_of);
+	mc->x_gather = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->object_of = plait_alloc_zero(a, (size_t)count, sizeof(int));
+	mc->list_valid = false;
+	mc->zone_parent = plait_alloc_zero(a, (size_t)count, sizeof(int));
+	mc->touched = plait_alloc_zero(a, (size_t)count, sizeof(int));
+	mc->members = plait_alloc_zero(a, (size_t)count, sizeof *mc->members);
+	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
+	    mc->guard == NULL || mc->object_of == NULL) {
+		mc->particle_capacity = 0;
+		return false;
+	}
+	for (int i = 0; i < count; ++i) {
+		mc->zone_parent[i] = -1;
+	}
+	mc->particle_capacity = count;
+	return true;
+}
+
+bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
+{
+	*active = false;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc == NULL) {
+		mc = plait_alloc_zero(&sim->allocator, 1, sizeof *mc);
+		if (mc == NULL) {
+			return false;
+		}
+		sim->mesh_contacts = mc;
+		sim->mesh_contacts_dirty = true;
+	}
+	if (sim->mesh_contacts_dirty) {
+		mc->list_valid = false;
+		mc->pair_count = 0;
+		sim->mesh_contacts_dirty_objects = true;
+		if (!build_elements(sim, mc)) {
+			return false;
+		}
+		sim->mesh_contacts_dirty = false;
+	}
+	if (mc->active && !reserve_particles(sim, mc)) {
+		return false;
+	}
+	if (mc->active && sim->mesh_contacts_dirty_objects) {
+		for (int i = 0; i < sim->particles.count; ++i) {
+			mc->object_of[i] = -1;
+		}
+		for (int k = 0; k < mc->object_count; ++k) {
+			const collision_object *o = &mc->objects[k];
+			for (int e = o->first; e < o->first + o->count; ++e) {
+				for (int q = 0; q < mc->elements[e].size; ++q) {
+					mc->object_of[mc->elements[e].v[q]] = k;
+				}
+			}
+		}
+		sim->mesh_contacts_dirty_objects = false;
+	}
+	*active = mc->active;
+	return true;
+}
+
+void plait_mesh_contacts_destroy(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc == NULL) {
+		return;
+	}
+	const plait_allocator *a = &sim->allocator;
+	free_elements(mc, a);
+	plait_free(a, mc->pairs);
+	plait_free(a, mc->zone_parent);
+	plait_free(a, mc->touched);
+	plait_free(a, mc->members);
+	plait_free(a, mc->x_gather);
+	plait_free(a, mc->guard);
+	plait_free(a, mc->object_of);
+	plait_free(a, mc);
+	sim->mesh_contacts = NULL;
+}
+
+static void forget_rest_bounds(plait_mesh_contacts *mc);
+
+void plait_mesh_contacts_begin_substep(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc != NULL) {
+		mc->gathered = false;
+		if (sim->substep == 0) {
+			forget_rest_bounds(mc); /* positions may have been set between frames */
+		}
+	}
+}
+
+/* ---- Geometry of primitive pairs --------------------------------------------------------- */
+
+static float primitive_distance(int type, const vec3 *x)
+{
+	switch (type) {
+	case PAIR_VERTEX_FACE: {
+		int region;
+		vec3 q = plait_closest_point_on_triangle(x[0], x[1], x[2], x[3], &region, NULL);
+		return v3_length(v3_sub(x[0], q));
+	}
+	case PAIR_EDGE_EDGE: {
+		float s, t;
+		return sqrtf(plait_closest_segments(x[0], x[1], x[2], x[3], &s, &t));
+	}
+	case PAIR_VERTEX_EDGE:
+		return v3_length(v3_sub(x[0], v3_lerp(x[1], x[2], plait_closest_on_segment(x[0], x[1], x[2]))));
+	default:
+		return v3_length(v3_sub(x[0], x[1]));
+	}
+}
+
+static void gather_points(const vec3 *source, const int *v, int n, vec3 *out)
+{
+	for (int k = 0; k < n; ++k) {
+		out[k] = source[v[k]];
+	}
+}
+
+static void gather_current(const plait_point *point, const int *v, int n, vec3 *out)
+{
+	for (int k = 0; k < n; ++k) {
+		out[k] = point[v[k]].x;
+	}
+}
+
+/* Whether the pair's primitives, moving on straight lines from start to end, come within
+ * distance of each other (the conservative test: never a miss). */
+static bool paths_meet(int type, const vec3 *start, const vec3 *end, float distance)
+{
+	/* Vertex-edge is an edge-edge test with a zero-length first edge; vertex-vertex one with
+	 * two. */
+	static const int source[4][4] = {{0, 1, 2, 3}, {0, 1, 2, 3}, {0, 0, 1, 2}, {0, 0, 1, 1}};
+	plait_ccd_motion_float m;
+	for (int k = 0; k < 4; ++k) {
+		int q = source[type][k];
+		m.start[k][0] = start[q].x;
+		m.start[k][1] = start[q].y;
+		m.start[k][2] = start[q].z;
+		m.end[k][0] = end[q].x;
+		m.end[k][1] = end[q].y;
+		m.end[k][2] = end[q].z;
+	}
+	float toi;
+	if (type == PAIR_VERTEX_FACE) {
+		return plait_ccd_vertex_face_float(&m, distance, 1e-2f, 1.0f, &toi);
+	}
+	return plait_ccd_edge_edge_float(&m, distance, 1e-2f, 1.0f, &toi);
+}
+
+/* How much the distance between the primitives can change over the substep. Distances do not
+ * change when everything moves together, so motions count relative to the first vertex's;
+ * relative to that, the distance changes no faster than the largest motion of a point of the
+ * first primitive plus that of the second (the distance is 1-Lipschitz in every vertex). */
+static float largest_motion(int type, const vec3 *start, const vec3 *end)
+{
+	float first = 0.0f, second = 0.0f;
+	int n = pair_size[type];
+	int first_count = type == PAIR_EDGE_EDGE ? 2 : 1;
+	vec3 common = v3_sub(end[0], start[0]);
+	for (int k = 1; k < n; ++k) {
+		float d = v3_length(v3_sub(v3_sub(end[k], start[k]), common));
+		if (k < first_count) {
+			first = plait_maxf(first, d);
+		} else {
+			second = plait_maxf(second, d);
+		}
+	}
+	return first + second;
+}
+
+/* A lower bound of the distance between the primitives over the substep. */
+static float closest_approach_bound(int type, const vec3 *start, const vec3 *end)
+{
+	float d0 = primitive_distance(type, start), d1 = primitive_distance(type, end);
+	return 0.5f * (d0 + d1 - largest_motion(type, start, end));
+}
+
+/* ---- Which primitive pairs exist --------------------------------------------------------- */
+
+/* The failsafe keeps primitives this far apart, scene units: a thousandth of a millimetre in
+ * metres, well above float rounding at the sizes of cloth and well below any thickness. */
+#define FAILSAFE_DISTANCE 1e-6f
+
+/* Pairs are listed within this many times their contact distance (plus their guards). */
+#define LIST_SCALE 1.1f
+
+typedef enum stage {
+	STAGE_REST, /* finding the rest pairs, from the start positions */
+	STAGE_GATHER,
+	STAGE_FAILSAFE,
+} stage;
+
+typedef struct pair_pass {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+	stage stage;
+	float failsafe_distance;
+	int hits;
+	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
+	 * (or shares a vertex); the element pairs that are, for the exclusion lists. */
+	bool all_rest;
+	int excluded_count, excluded_capacity;
+	int (*excluded)[2];
+	bool failed;
+} pair_pass;
+
+static bool shares_vertex(const int *v, int n)
+{
+	for (int i = 0; i < n; ++i) {
+		for (int j = i + 1; j < n; ++j) {
+			if (v[i] == v[j]) {
+				return true;
+			}
+		}
+	}
+	return false;
+}
+
+static float friction_of(const plait_material *a, const plait_material *b)
+{
+	float friction = 0.5f * (a->friction + b->friction);
+	return friction > 1.0f ? 1.0f : friction;
+}
+
+static float mean_radius(const plait_particles *p, const int *v, int n)
+{
+	float sum = 0.0f;
+	for (int k = 0; k < n; ++k) {
+		sum += p->radius[v[k]];
+	}
+	return sum / (float)n;
+}
+
+static bool add_pair_to(plait_sim *sim, contact_pair **pairs, int *count, int *capacity,
+                        const contact_pair *pair)
+{
+	if (*count == *capacity) {
+		int bigger_capacity = *capacity < 256 ? 256 : 2 * *capacity;
+		contact_pair *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		if (bigger == NULL) {
+			return false;
+		}
+		if (*count > 0) {
+			memcpy(bigger, *pairs, sizeof *bigger * (size_t)*count);
+		}
+		plait_free(&sim->allocator, *pairs);
+		*pairs = bigger;
+		*capacity = bigger_capacity;
+	}
+	(*pairs)[(*count)++] = *pair;
+	return true;
+}
+
+static bool add_pair(plait_sim *sim, plait_mesh_contacts *mc, const contact_pair *pair)
+{
+	if (!add_pair_to(sim, &mc->pairs, &mc->pair_count, &mc->pair_capacity, pair)) {
+		mc->out_of_memory = true;
+		return false;
+	}
+	return true;
+}
+
+/* Which side of the other primitive the first is on at the start of the substep. */
+static void start_side(contact_pair *pair, const vec3 *start, const vec3 *end)
+{
+	if (pair->type == PAIR_VERTEX_FACE) {
+		vec3 n = v3_cross(v3_sub(start[2], start[1]), v3_sub(start[3], start[1]));
+		float along = v3_dot(v3_sub(start[0], start[1]), n);
+		if (along == 0.0f) {
+			/* In the plane: the side it comes from is the one it moves away from. */
+			vec3 motion = v3_sub(v3_sub(end[0], start[0]), v3_sub(end[1], start[1]));
+			along = -v3_dot(motion, n);
+		}
+		pair->side = along < 0.0f ? -1.0f : 1.0f;
+		return;
+	}
+	vec3 first, second;
+	if (pair->type == PAIR_EDGE_EDGE) {
+		float s, t;
+		plait_closest_segments(start[0], start[1], start[2], start[3], &s, &t);
+		first = v3_lerp(start[0], start[1], s);
+		second = v3_lerp(start[2], start[3], t);
+	} else if (pair->type == PAIR_VERTEX_EDGE) {
+		first = start[0];
+		second = v3_lerp(start[1], start[2], plait_closest_on_segment(start[0], start[1], start[2]));
+	} else {
+		first = start[0];
+		second = start[1];
+	}
+	vec3 d = v3_sub(first, second);
+	float length = v3_length(d);
+	if (length > 0.0f) {
+		pair->direction = v3_scale(d, 1.0f / length);
+	} else if (pair->type == PAIR_EDGE_EDGE &&
+	           v3_length_sq(v3_cross(v3_sub(start[1], start[0]), v3_sub(start[3], start[2]))) > 0.0f) {
+		pair->direction = v3_normalize(v3_cross(v3_sub(start[1], start[0]), v3_sub(start[3], start[2])));
+	} else {
+		pair->direction = v3(0.0f, 1.0f, 0.0f);
+	}
+}
+
+/* Merges the pair's vertices into one impact zone (union-find; the smaller index roots a
+ * union, so zones do not depend on the order pairs are met). */
+static void join_zone(plait_mesh_contacts *mc, const int *v, int n)
+{
+	int root = -1;
+	for (int k = 0; k < n; ++k) {
+		int i = v[k];
+		if (mc->zone_parent[i] < 0) {
+			mc->zone_parent[i] = i;
+			mc->touched[mc->touched_count++] = i;
+		}
+		while (mc->zone_parent[i] != i) {
+			mc->zone_parent[i] = mc->zone_parent[mc->zone_parent[i]];
+			i = mc->zone_parent[i];
+		}
+		if (root < 0) {
+			root = i;
+		} else if (i != root) {
+			int low = i < root ? i : root, high = i < root ? root : i;
+			mc->zone_parent[high] = low;
+			root = low;
+		}
+	}
+}
+
+/* The failsafe's test of one pair: swept from the start of the substep to now. */
+static void sweep_pair(pair_pass *pass, int type, const int *v)
+{
+	const plait_particles *p = &pass->sim->particles;
+	int n = pair_size[type];
+	vec3 start[4] = {{0}}, end[4] = {{0}};
+	gather_points(p->x_prev, v, n, start);
+	gather_current(p->point, v, n, end);
+	if (closest_approach_bound(type, start, end) > pass->failsafe_distance) {
+		return;
+	}
+	if (paths_meet(type, start, end, pass->failsafe_distance)) {
+		pass->hits += 1;
+		join_zone(pass->mc, v, n);
+	}
+}
+
+/* A primitive pair met by the traversal: in the failsafe it is swept; in the gather stage it is
+ * listed when its paths may come within its list distance: as a contact, or (pairs that only
+ * the failsafe watches) as a pair to sweep at the end of the substep. */
+static void visit_primitives(pair_pass *pass, int type, const int *v, const plait_material *first,
+                             const plait_material *second, bool self)
+{
+	int n = pair_size[type];
+	if (shares_vertex(v, n)) {
+		return;
+	}
+	if (pass->stage == STAGE_FAILSAFE) {
+		sweep_pair(pass, type, v);
+		return;
+	}
+	plait_sim *sim = pass->sim;
+	plait_mesh_contacts *mc = pass->mc;
+	plait_particles *p = &sim->particles;
+	int first_count = type == PAIR_EDGE_EDGE ? 2 : 1;
+	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+	if (self) {
+		distance *= first->self_width_scale;
+	}
+	if (pass->stage == STAGE_REST) {
+		vec3 initial[4] = {{0}};
+		gather_points(p->x_start, v, n, initial);
+		float rest = primitive_distance(type, initial);
+		if (rest >= distance) {
+			pass->all_rest = false;
+			return;
+		}
+		if (type == PAIR_VERTEX_VERTEX) {
+			return; /* no crossing to watch */
+		}
+		contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
+		                     (uint8_t)type,
+		                     1,
+		                     0.0f,
+		                     0.0f,
+		                     1.0f,
+		                     {0.0f, 1.0f, 0.0f},
+		                     {1.0f, 1.0f},
+		                     -1.0f};
+		if (!add_pair_to(sim, &mc->rest_pairs, &mc->rest_count, &mc->rest_capacity, &pair)) {
+			pass->failed = true;
+		}
+		return;
+	}
+	float guards = 0.0f;
+	for (int side = 0; side < 2; ++side) {
+		float largest = 0.0f;
+		for (int k = side == 0 ? 0 : first_count; k < (side == 0 ? first_count : n); ++k) {
+			largest = plait_maxf(largest, mc->guard[v[k]]);
+		}
+		guards += largest;
+	}
+	if (!self) {
+		guards += mc->allowance[mc->object_of[v[0]] * mc->object_count + mc->object_of[v[n - 1]]];
+	}
+	float list_distance = LIST_SCALE * distance + guards + 2.0f * FAILSAFE_DISTANCE;
+	vec3 start[4] = {{0}}, end[4] = {{0}};
+	gather_current(p->point, v, n, end);
+	/* Boxes first: most pairs of neighbouring elements are rejected without a distance. */
+	vec3 lower_a = end[0], upper_a = end[0], lower_b = end[first_count], upper_b = end[first_count];
+	for (int k = 1; k < n; ++k) {
+		if (k < first_count) {
+			lower_a = v3_min(lower_a, end[k]);
+			upper_a = v3_max(upper_a, end[k]);
+		} else {
+			lower_b = v3_min(lower_b, end[k]);
+			upper_b = v3_max(upper_b, end[k]);
+		}
+	}
+	if (lower_a.x - upper_b.x > list_distance || lower_b.x - upper_a.x > list_distance ||
+	    lower_a.y - upper_b.y > list_distance || lower_b.y - upper_a.y > list_distance ||
+	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance ||
+	    primitive_distance(type, end) > list_distance) {
+		return;
+	}
+	if (self && distance > 0.0f) {
+		/* A rest pair: the failsafe watches it (mc->rest_pairs); no contact. */
+		vec3 initial[4] = {{0}};
+		gather_points(p->x_start, v, n, initial);
+		if (primitive_distance(type, initial) < distance) {
+			return;
+		}
+	}
+	gather_points(p->x_prev, v, n, start);
+	contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
+	                     (uint8_t)type,
+	                     (uint8_t)self,
+	                     distance,
+	                     friction_of(first, second),
+	                     1.0f,
+	                     {0.0f, 1.0f, 0.0f},
+	                     {1.0f, 1.0f},
+	                     -1.0f};
+	/* The thickness between two primitives never exceeds their separation at the start frame
+	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
+	 * one object such pairs are rest pairs.) */
+	if (distance > 0.0f && !self) {
+		vec3 initial[4];
+		gather_points(p->x_start, v, n, initial);
+		pair.distance = plait_minf(distance, primitive_distance(type, initial));
+	}
+	/* Edges whose closest points are an end of either are in reach of a vertex-face pair of
+	 * the triangles round that end: only the failsafe watches them. */
+	if (type == PAIR_EDGE_EDGE && pair.distance > 0.0f) {
+		float ps, pt;
+		plait_closest_segments(end[0], end[1], end[2], end[3], &ps, &pt);
+		if (ps <= 0.0f || ps >= 1.0f || pt <= 0.0f || pt >= 1.0f) {
+			pair.distance = 0.0f;
+		}
+	}
+	if (first->collision_layer != second->collision_layer) {
+		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
+	}
+	start_side(&pair, start, end);
+	(void)add_pair(sim, mc, &pair);
+}
+
+static bool self_allows(const plait_material *m, int type)
+{
+	switch (m->self_flag) {
+	case PLAIT_SELF_COLLIDE_VERTEX:
+		return type == PAIR_VERTEX_VERTEX;
+	case PLAIT_SELF_COLLIDE_VERTEX_FACE:
+		return type == PAIR_VERTEX_FACE;
+	default:
+		return type == PAIR_VERTEX_FACE || type == PAIR_EDGE_EDGE;
+	}
+}
+
+static void visit_elements(int a, int b, void *context)
+{
+
+	pair_pass *pass = context;
+	const plait_mesh_contacts *mc = pass->mc;
+	const element *ea = &mc->elements[a], *eb = &mc->elements[b];
+	const plait_material *ma = &pass->sim->materials[ea->material];
+	const plait_material *mb = &pass->sim->materials[eb->material];
+	bool self = ma->object == mb->object;
+	if (self && excluded(mc, a, b)) {
+		return;
+	}
+	bool failsafe = pass->stage == STAGE_FAILSAFE;
+	pass->all_rest = true;
+	int v[4];
+	for (int turn = 0; turn < 2; ++turn) {
+		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
+		const plait_material *mv = turn == 0 ? ma : mb, *mo = turn == 0 ? mb : ma;
+		for (int k = 0; k < vertex_side->size; ++k) {
+			if (!(vertex_side->own_vertices & (1u << k))) {
+				continue;
+			}
+			v[0] = vertex_side->v[k];
+			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE))) {
+				v[1] = other->v[0];
+				v[2] = other->v[1];
+				v[3] = other->v[2];
+				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
+			}
+			if (other->size == 2 && vertex_side->size == 1) {
+				v[1] = other->v[0];
+				v[2] = other->v[1];
+				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
+			}
+			if (turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX)) {
+				for (int m = 0; m < other->size; ++m) {
+					if (other->own_vertices & (1u << m)) {
+						v[1] = other->v[m];
+						visit_primitives(pass, PAIR_VERTEX_VERTEX, v, mv, mo, self);
+					}
+				}
+			}
+		}
+	}
+	if (ea->size >= 2 && eb->size >= 2 && (!self || self_allows(ma, PAIR_EDGE_EDGE))) {
+		int edges_a = ea->size == 2 ? 1 : 3, edges_b = eb->size == 2 ? 1 : 3;
+		for (int i = 0; i < edges_a; ++i) {
+			if (!(ea->own_edges & (1u << i))) {
+				continue;
+			}
+			for (int j = 0; j < edges_b; ++j) {
+				if (!(eb->own_edges & (1u << j))) {
+					continue;
+				}
+				v[0] = ea->v[i];
+				v[1] = ea->v[(i + 1) % ea->size];
+				v[2] = eb->v[j];
+				v[3] = eb->v[(j + 1) % eb->size];
+				visit_primitives(pass, PAIR_EDGE_EDGE, v, ma, mb, self);
+			}
+		}
+	}
+	if (pass->stage == STAGE_REST && pass->all_rest && !pass->failed) {
+		if (pass->excluded_count + 2 > pass->excluded_capacity) {
+			int capacity = pass->excluded_capacity < 1024 ? 1024 : 2 * pass->excluded_capacity;
+			int(*bigger)[2] = plait_alloc_zero(&pass->sim->allocator, (size_t)capacity, sizeof *bigger);
+			if (bigger == NULL) {
+				pass->failed = true;
+				return;
+			}
+			if (pass->excluded_count > 0) {
+				memcpy(bigger, pass->excluded, sizeof *bigger * (size_t)pass->excluded_count);
+			}
+			plait_free(&pass->sim->allocator, pass->excluded);
+			pass->excluded = bigger;
+			pass->excluded_capacity = capacity;
+		}
+		pass->excluded[pass->excluded_count][0] = a;
+		pass->excluded[pass->excluded_count++][1] = b;
+		pass->excluded[pass->excluded_count][0] = b;
+		pass->excluded[pass->excluded_count++][1] = a;
+	}
+}
+
+/* Element boxes. For the gather: around the current positions, grown by LIST_SCALE times the
+ * element's reach plus its largest guard (a pair within its list distance has overlapping
+ * boxes). For the failsafe: around the paths of the substep, grown by `margin`. */
+static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin)
+{
+	const plait_particles *p = &sim->particles;
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		vec3 lower = p->point[el->v[0]].x, upper = lower;
+		float radius = 0.0f, guard = 0.0f;
+		for (int k = 0; k < el->size; ++k) {
+			int i = el->v[k];
+			lower = v3_min(lower, p->point[i].x);
+			upper = v3_max(upper, p->point[i].x);
+			if (paths) {
+				lower = v3_min(lower, p->x_prev[i]);
+				upper = v3_max(upper, p->x_prev[i]);
+			}
+			radius = plait_maxf(radius, p->radius[i]);
+			guard = plait_maxf(guard, mc->guard[i]);
+		}
+		float g = margin;
+		if (!paths) {
+			const plait_material *m = &sim->materials[el->material];
+			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
+			g += LIST_SCALE * reach + guard + 0.5f * mc->allowance_max + FAILSAFE_DISTANCE;
+		}
+		mc->lower[e] = v3_sub(lower, v3(g, g, g));
+		mc->upper[e] = v3_add(upper, v3(g, g, g));
+	}
+	for (int k = 0; k < mc->object_count; ++k) {
+		collision_object *o = &mc->objects[k];
+		plait_element_tree_refit(&o->tree, mc->lower + o->first, mc->upper + o->first);
+	}
+}
+
+/* Element pairs of two objects (or of one with itself), in global element numbers. */
+typedef struct object_pass {
+	pair_pass *pass;
+	int first_a, first_b;
+} object_pass;
+
+static void visit_object_elements(int a, int b, void *context)
+{
+	const object_pass *o = context;
+	visit_elements(o->first_a + a, o->first_b + b, o->pass);
+}
+
+/* Every pair of elements that may touch: each self-colliding object with itself, then each
+ * pair of objects that collide with each other. */
+static void traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
+{
+	const plait_sim *sim = pass->sim;
+	for (int a = 0; a < mc->object_count; ++a) {
+		const collision_object *oa = &mc->objects[a];
+		vec3 *la = mc->lower + oa->first, *ua = mc->upper + oa->first;
+		object_pass self = {pass, oa->first, oa->first};
+		if (oa->self) {
+			plait_element_tree_pairs(&oa->tree, la, ua, visit_object_elements, &self);
+		}
+		if (!sim->settings.cloth_contacts) {
+			continue;
+		}
+		for (int b = a + 1; b < mc->object_count; ++b) {
+			const collision_object *ob = &mc->objects[b];
+			bool points_a = mc->elements[oa->first].size == 1, points_b = mc->elements[ob->first].size == 1;
+			if (points_a && points_b) {
+				continue; /* particle pairs (contact.c) */
+			}
+			object_pass between = {pass, oa->first, ob->first};
+			plait_element_tree_pairs_between(&oa->tree, la, ua, &ob->tree, mc->lower + ob->first,
+			                                 mc->upper + ob->first, visit_object_elements, &between);
+		}
+	}
+}
+
+/* The mean motion of each collision object from the gather positions to `x` (a particle
+ * array: positions now, or at the substep's start), into mc->shift. */
+static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const vec3 *x_prev, bool at_start)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		mc->shift[k] = v3(0.0f, 0.0f, 0.0f);
+	}
+	int *counts = mc->touched; /* free outside the failsafe */
+	for (int k = 0; k < mc->object_count; ++k) {
+		counts[k] = 0;
+	}
+	for (int i = 0; i < p->count; ++i) {
+		int o = mc->object_of[i];
+		if (o >= 0) {
+			vec3 x = at_start ? x_prev[i] : p->point[i].x;
+			mc->shift[o] = v3_add(mc->shift[o], v3_sub(x, mc->x_gather[i]));
+			counts[o] += 1;
+		}
+	}
+	for (int k = 0; k < mc->object_count; ++k) {
+		mc->shift[k] = v3_scale(mc->shift[k], 1.0f / (float)(counts[k] > 0 ? counts[k] : 1));
+	}
+}
+
+static int compare_int_pairs(const void *a, const void *b)
+{
+	const int *x = a, *y = b;
+	if (x[0] != y[0]) {
+		return x[0] < y[0] ? -1 : 1;
+	}
+	return x[1] < y[1] ? -1 : x[1] > y[1];
+}
+
+/* The rest pairs and the excluded element pairs of every self-colliding object, from the start
+ * positions: element boxes grown so that primitives within their contact distance at the
+ * start overlap. */
+static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_allocator *a = &sim->allocator;
+	const plait_particles *p = &sim->particles;
+	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, false, 0, 0, NULL, false};
+	for (int k = 0; k < mc->object_count && !pass.failed; ++k) {
+		collision_object *o = &mc->objects[k];
+		if (!o->self) {
+			continue;
+		}
+		const plait_material *m = &sim->materials[o->material];
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			vec3 lower = p->x_start[el->v[0]], upper = lower;
+			float radius = 0.0f;
+			for (int q = 0; q < el->size; ++q) {
+				lower = v3_min(lower, p->x_start[el->v[q]]);
+				upper = v3_max(upper, p->x_start[el->v[q]]);
+				radius = plait_maxf(radius, p->radius[el->v[q]]);
+			}
+			float g = radius * m->self_width_scale;
+			mc->lower[e] = v3_sub(lower, v3(g, g, g));
+			mc->upper[e] = v3_add(upper, v3(g, g, g));
+		}
+		plait_element_tree_refit(&o->tree, mc->lower + o->first, mc->upper + o->first);
+		object_pass self = {&pass, o->first, o->first};
+		plait_element_tree_pairs(&o->tree, mc->lower + o->first, mc->upper + o->first, visit_object_elements,
+		                         &self);
+	}
+	mc->excluded_start = plait_alloc_zero(a, (size_t)mc->element_count + 1, sizeof(int));
+	mc->excluded_list =
+	    plait_alloc_zero(a, (size_t)(pass.excluded_count > 0 ? pass.excluded_count : 1), sizeof(int));
+	bool ok = !pass.failed && mc->excluded_start != NULL && mc->excluded_list != NULL;
+	if (ok) {
+		qsort(pass.excluded, (size_t)pass.excluded_count, sizeof *pass.excluded, compare_int_pairs);
+		for (int k = 0; k < pass.excluded_count; ++k) {
+			mc->excluded_start[pass.excluded[k][0] + 1] += 1;
+			mc->excluded_list[k] = pass.excluded[k][1];
+		}
+		for (int e = 0; e < mc->element_count; ++e) {
+			mc->excluded_start[e + 1] += mc->excluded_start[e];
+		}
+	}
+	plait_free(a, pass.excluded);
+	return ok;
+}
+
+/* Each vertex's guard: how far it may move, relative to its object as a whole, before the list
+ * must be gathered again: its relative motion of this substep so far (so the substep's start
+ * is covered), a tenth of its radius (contact pushes) and a tenth of a millimetre in metres.
+ * Each pair of objects likewise may move relative to each other by their relative motion of
+ * the substep so far plus a tenth of a millimetre. Relative motion is what brings primitives
+ * together: a cloth falling fast keeps its list. */
+static void gather(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	mc->pair_count = 0;
+	mc->out_of_memory = false;
+	const plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		mc->x_gather[i] = p->point[i].x;
+	}
+	object_shifts(sim, mc, p->x_prev, true); /* minus the motion of the substep so far */
+	for (int i = 0; i < p->count; ++i) {
+		int o = mc->object_of[i];
+		vec3 motion = v3_sub(p->x_prev[i], p->point[i].x);
+		float relative = o >= 0 ? v3_length(v3_sub(motion, mc->shift[o])) : v3_length(motion);
+		mc->guard[i] = relative + 0.1f * p->radius[i] + 1e-4f;
+	}
+	mc->allowance_max = 0.0f;
+	for (int a = 0; a < mc->object_count; ++a) {
+		for (int b = 0; b < mc->object_count; ++b) {
+			float allow = v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
+			mc->allowance[a * mc->object_count + b] = allow;
+			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
+		}
+	}
+	fit_boxes(sim, mc, false, 0.0f);
+	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, false, 0, 0, NULL, false};
+	traverse_objects(mc, &pass);
+	mc->list_valid = !mc->out_of_memory;
+}
+
+/* Whether the list still holds every pair that can touch or cross. True while, at the
+ * substep's start (with `with_start`) and now, every vertex is within its guard of where it
+ * was at the gather once its object's mean motion is taken out, and every pair of objects is
+ * within its allowance of where it was relative to the other. A pair not listed was then
+ * farther apart than LIST_SCALE times its contact distance plus its guards (and allowance),
+ * and distances do not change when things move together, so over any path between such
+ * positions it stays farther than LIST_SCALE times its contact distance. */
+static bool list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start)
+{
+	if (!mc->list_valid) {
+		return false;
+	}
+	const plait_particles *p = &sim->particles;
+	for (int when = with_start ? 0 : 1; when < 2; ++when) {
+		object_shifts(sim, mc, p->x_prev, when == 0);
+		for (int a = 0; a < mc->object_count; ++a) {
+			for (int b = a + 1; b < mc->object_count; ++b) {
+				if (v3_length(v3_sub(mc->shift[a], mc->shift[b])) > mc->allowance[a * mc->object_count + b]) {
+					return false;
+				}
+			}
+		}
+		for (int i = 0; i < p->count; ++i) {
+			int o = mc->object_of[i];
+			if (o < 0) {
+				continue;
+			}
+			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
+			vec3 relative = v3_sub(v3_sub(x, mc->x_gather[i]), mc->shift[o]);
+			if (v3_length_sq(relative) > mc->guard[i] * mc->guard[i]) {
+				return false;
+			}
+		}
+	}
+	return true;
+}
+
+/* ---- Contacts ---------------------------------------------------------------------------- */
+
+/* Moves the pair's vertices so that C = (separation along n) - distance becomes 0: the vertices
+ * move along n by their inverse mass times their weight g (the constraint's gradient), and
+ * friction removes relative tangential motion of the substep within friction times the push. */
+static bool respond(plait_sim *sim, const contact_pair *pair, const float *g, vec3 n, float c)
+{
+	plait_particles *p = &sim->particles;
+	int count = pair_size[pair->type];
+	int first_count = pair->type == PAIR_EDGE_EDGE ? 2 : 1;
+	float w[4];
+	bool any_free = false;
+	for (int k = 0; k < count; ++k) {
+		int i = pair->v[k];
+		float scale = pair->scale[k < first_count ? 0 : 1];
+		w[k] = p->point[i].w * scale;
+		/* A vertex resting on a plane collider does not give way toward it (the plane would
+		 * push it back): this lets layers stack on the ground. */
+		bool held = (p->flags[i] & PLAIT_PARTICLE_SUPPORTED) && g[k] * v3_dot(n, p->contact_normal[i]) < 0.0f;
+		if (held) {
+			w[k] = -w[k]; /* marked; restored if every vertex is held */
+		}
+		any_free = any_free || w[k] > 0.0f;
+	}
+	float denominator = 0.0f;
+	for (int k = 0; k < count; ++k) {
+		w[k] = any_free ? plait_maxf(w[k], 0.0f) : fabsf(w[k]);
+		denominator += w[k] * g[k] * g[k];
+	}
+	if (!(denominator > 0.0f)) {
+		return false;
+	}
+	vec3 relative = {0.0f, 0.0f, 0.0f};
+	for (int k = 0; k < count; ++k) {
+		int i = pair->v[k];
+		relative = v3_mul_add(relative, g[k], v3_sub(p->point[i].x, p->x_prev[i]));
+	}
+	float depth = -c;
+	vec3 move = v3_scale(n, depth);
+	vec3 tangential = v3_mul_add(relative, -v3_dot(relative, n), n);
+	float tangential_length = v3_length(tangential);
+	if (tangential_length > 0.0f && pair->friction > 0.0f) {
+		float limit = pair->friction * depth;
+		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
+		move = v3_mul_add(move, -removed, tangential);
+	}
+	vec3 step = v3_scale(move, 1.0f / denominator);
+	for (int k = 0; k < count; ++k) {
+		int i = pair->v[k];
+		p->point[i].x = v3_mul_add(p->point[i].x, w[k] * g[k], step);
+	}
+	return true;
+}
+
+static int project_pair(plait_sim *sim, contact_pair *pair)
+{
+	plait_particles *p = &sim->particles;
+	int type = pair->type, n = pair_size[type];
+	vec3 x[4];
+	gather_current(p->point, pair->v, n, x);
+	float g[4];
+	vec3 normal;
+	float separation;
+	if (type == PAIR_VERTEX_FACE) {
+		int region;
+		float weights[3];
+		vec3 q = plait_closest_point_on_triangle(x[0], x[1], x[2], x[3], &region, weights);
+		vec3 face = v3_cross(v3_sub(x[2], x[1]), v3_sub(x[3], x[1]));
+		float face_length = v3_length(face);
+		if (!(face_length > 0.0f)) {
+			return 0;
+		}
+		face = v3_scale(face, 1.0f / face_length);
+		vec3 r = v3_sub(x[0], q);
+		float along = v3_dot(r, face) * pair->side;
+		float reach = v3_length(r);
+		if (region != 0 && reach >= pair->distance && along >= 0.0f) {
+			return 0; /* beside the triangle, out of reach, on its side */
+		}
+		bool crossed = false;
+		if (along < 0.0f) {
+			/* On the other side of the plane: through the triangle, or round it? */
+			vec3 start[4];
+			gather_points(p->x_prev, pair->v, n, start);
+			crossed = paths_meet(type, start, x, 0.0f);
+			if (crossed) {
+				sim->ccd_hits += 1;
+			} else {
+				pair->side = -pair->side;
+				along = -along;
+			}
+		}
+		if (region == 0 || crossed) {
+			normal = v3_scale(face, pair->side);
+			separation = along;
+		} else {
+			normal = reach > 1e-9f ? v3_scale(r, 1.0f / reach) : v3_scale(face, pair->side);
+			separation = reach;
+		}
+		if (separation >= pair->distance) {
+			return 0;
+		}
+		g[0] = 1.0f;
+		g[1] = -weights[0];
+		g[2] = -weights[1];
+		g[3] = -weights[2];
+	} else {
+		vec3 first, second;
+		float s = 0.0f, t = 0.0f;
+		if (type == PAIR_EDGE_EDGE) {
+			plait_closest_segments(x[0], x[1], x[2], x[3], &s, &t);
+			first = v3_lerp(x[0], x[1], s);
+			second = v3_lerp(x[2], x[3], t);
+		} else if (type == PAIR_VERTEX_EDGE) {
+			t = plait_closest_on_segment(x[0], x[1], x[2]);
+			first = x[0];
+			second = v3_lerp(x[1], x[2], t);
+		} else {
+			first = x[0];
+			second = x[1];
+		}
+		vec3 r = v3_sub(first, second);
+		float length = v3_length(r);
+		if (length >= pair->distance && v3_dot(r, pair->direction) >= 0.0f) {
+			return 0;
+		}
+		bool crossed = false;
+		if (v3_dot(r, pair->direction) < 0.0f) {
+			vec3 start[4];
+			gather_points(p->x_prev, pair->v, n, start);
+			crossed = paths_meet(type, start, x, 0.0f);
+			sim->ccd_hits += crossed;
+		}
+		if (crossed) {
+			normal = pair->direction;
+			separation = v3_dot(r, normal);
+		} else {
+			normal = length > 1e-9f ? v3_scale(r, 1.0f / length) : pair->direction;
+			separation = length;
+			pair->direction = normal;
+		}
+		if (separation >= pair->distance) {
+			return 0;
+		}
+		if (type == PAIR_EDGE_EDGE) {
+			g[0] = 1.0f - s;
+			g[1] = s;
+			g[2] = -(1.0f - t);
+			g[3] = -t;
+		} else if (type == PAIR_VERTEX_EDGE) {
+			g[0] = 1.0f;
+			g[1] = -(1.0f - t);
+			g[2] = -t;
+		} else {
+			g[0] = 1.0f;
+			g[1] = -1.0f;
+		}
+	}
+	return respond(sim, pair, g, normal, separation - pair->distance);
+}
+
+int plait_mesh_contacts_project(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc == NULL || !mc->active) {
+		return 0;
+	}
+	if (!mc->gathered) {
+		if (!list_covers(sim, mc, true)) {
+			gather(sim, mc);
+		}
+		mc->gathered = true;
+	}
+	int contacts = 0;
+	for (int k = 0; k < mc->pair_count; ++k) {
+		if (mc->pairs[k].distance > 0.0f) {
+			contacts += project_pair(sim, &mc->pairs[k]);
+		}
+	}
+	return contacts;
+}
+
+/* ---- Failsafe: impact zones -------------------------------------------------------------- */
+
+static int zone_root(int *parent, int i)
+{
+	while (parent[i] != i) {
+		parent[i] = parent[parent[i]];
+		i = parent[i];
+	}
+	return i;
+}
+
+static int compare_members(const void *a, const void *b)
+{
+	const int *x = a, *y = b;
+	if (x[0] != y[0]) {
+		return x[0] < y[0] ? -1 : 1;
+	}
+	return x[1] < y[1] ? -1 : x[1] > y[1];
+}
+
+/* Rotation by angle |theta| about theta's direction (Rodrigues). */
+static vec3 rotate(vec3 theta, vec3 r)
+{
+	float angle = v3_length(theta);
+	if (!(angle > 1e-12f)) {
+		return v3_add(r, v3_cross(theta, r));
+	}
+	vec3 axis = v3_scale(theta, 1.0f / angle);
+	float c = cosf(angle), s = sinf(angle);
+	return v3_add(v3_add(v3_scale(r, c), v3_scale(v3_cross(axis, r), s)),
+	              v3_scale(axis, v3_dot(axis, r) * (1.0f - c)));
+}
+
+/* Solves the symmetric 3x3 system I x = b (Cramer, in double); a singular I (a zone on a line)
+ * is regularised. */
+static vec3 solve_inertia(const double i[6], vec3 b)
+{
+	double xx = i[0], yy = i[1], zz = i[2], xy = i[3], xz = i[4], yz = i[5];
+	double trace = xx + yy + zz;
+	double eps = 1e-6 * trace + 1e-30;
+	xx += eps;
+	yy += eps;
+	zz += eps;
+	double c00 = yy * zz - yz * yz, c01 = xz * yz - xy * zz, c02 = xy * yz - xz * yy;
+	double det = xx * c00 + xy * c01 + xz * c02;
+	if (!(fabs(det) > 0.0)) {
+		return v3(0.0f, 0.0f, 0.0f);
+	}
+	double c11 = xx * zz - xz * xz, c12 = xy * xz - xx * yz, c22 = xx * yy - xy * xy;
+	double bx = b.x, by = b.y, bz = b.z;
+	return v3((float)((c00 * bx + c01 * by + c02 * bz) / det),
+	          (float)((c01 * bx + c11 * by + c12 * bz) / det),
+	          (float)((c02 * bx + c12 * by + c22 * bz) / det));
+}
+
+/* Makes the motion of zone members[first, last) over the substep rigid: the mean displacement
+ * and the angular momentum (about the centre of mass) of the substep are kept. A zone with
+ * pinned vertices takes their mean displacement, without rotation. */
+static void rigidify(plait_particles *p, int (*members)[2], int first, int last)
+{
+	double mass = 0.0, c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0};
+	double pinned = 0.0, pin_motion[3] = {0, 0, 0};
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		vec3 a = p->x_prev[i], b = p->point[i].x;
+		if (p->point[i].w == 0.0f) {
+			pinned += 1.0;
+			pin_motion[0] += (double)(b.x - a.x);
+			pin_motion[1] += (double)(b.y - a.y);
+			pin_motion[2] += (double)(b.z - a.z);
+			continue;
+		}
+		double m = 1.0 / (double)p->point[i].w;
+		mass += m;
+		c0[0] += m * a.x;
+		c0[1] += m * a.y;
+		c0[2] += m * a.z;
+		c1[0] += m * b.x;
+		c1[1] += m * b.y;
+		c1[2] += m * b.z;
+	}
+	if (pinned > 0.0) {
+		vec3 shift = v3((float)(pin_motion[0] / pinned), (float)(pin_motion[1] / pinned),
+		                (float)(pin_motion[2] / pinned));
+		for (int k = first; k < last; ++k) {
+			int i = members[k][1];
+			if (p->point[i].w > 0.0f) {
+				p->point[i].x = v3_add(p->x_prev[i], shift);
+			}
+		}
+		return;
+	}
+	if (!(mass > 0.0)) {
+		return;
+	}
+	vec3 centre0 = v3((float)(c0[0] / mass), (float)(c0[1] / mass), (float)(c0[2] / mass));
+	vec3 centre1 = v3((float)(c1[0] / mass), (float)(c1[1] / mass), (float)(c1[2] / mass));
+	vec3 shift = v3_sub(centre1, centre0);
+	double inertia[6] = {0, 0, 0, 0, 0, 0};
+	double momentum[3] = {0, 0, 0};
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		double m = 1.0 / (double)p->point[i].w;
+		vec3 r = v3_sub(p->x_prev[i], centre0);
+		vec3 d = v3_sub(v3_sub(p->point[i].x, p->x_prev[i]), shift);
+		vec3 l = v3_cross(r, d);
+		momentum[0] += m * l.x;
+		momentum[1] += m * l.y;
+		momentum[2] += m * l.z;
+		double rr = (double)v3_dot(r, r);
+		inertia[0] += m * (rr - (double)(r.x * r.x));
+		inertia[1] += m * (rr - (double)(r.y * r.y));
+		inertia[2] += m * (rr - (double)(r.z * r.z));
+		inertia[3] -= m * (double)(r.x * r.y);
+		inertia[4] -= m * (double)(r.x * r.z);
+		inertia[5] -= m * (double)(r.y * r.z);
+	}
+	vec3 theta = solve_inertia(inertia, v3((float)momentum[0], (float)momentum[1], (float)momentum[2]));
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		p->point[i].x = v3_add(centre1, rotate(theta, v3_sub(p->x_prev[i], centre0)));
+	}
+}
+
+/* Sweeps every pair from the start of the substep to now; returns the crossing pairs found
+ * and leaves them merged into zones. */
+/* The rest pairs, each swept unless a lower bound of its distance at the substep's start, less
+ * what its motion (relative to its first vertex) can take off, still keeps it apart. The bound
+ * is carried from substep to substep, and known exactly again whenever the pair is swept. */
+static void sweep_rest_pairs(pair_pass *pass)
+{
+	plait_mesh_contacts *mc = pass->mc;
+	const plait_particles *p = &pass->sim->particles;
+	for (int k = 0; k < mc->rest_count; ++k) {
+		contact_pair *pair = &mc->rest_pairs[k];
+		int n = pair_size[pair->type];
+		vec3 start[4] = {{0}}, end[4] = {{0}};
+		gather_points(p->x_prev, pair->v, n, start);
+		gather_current(p->point, pair->v, n, end);
+		float motion = largest_motion(pair->type, start, end);
+		if (pair->lower - motion > pass->failsafe_distance) {
+			pair->lower -= motion;
+			continue;
+		}
+		pair->lower = primitive_distance(pair->type, end);
+		float d0 = primitive_distance(pair->type, start);
+		if (0.5f * (d0 + pair->lower - motion) > pass->failsafe_distance) {
+			continue;
+		}
+		if (paths_meet(pair->type, start, end, pass->failsafe_distance)) {
+			pass->hits += 1;
+			join_zone(mc, pair->v, n);
+		}
+	}
+}
+
+static void forget_rest_bounds(plait_mesh_contacts *mc)
+{
+	for (int k = 0; k < mc->rest_count; ++k) {
+		mc->rest_pairs[k].lower = -1.0f;
+	}
+}
+
+static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
+{
+	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, false, 0, 0, NULL, false};
+	sweep_rest_pairs(&pass);
+	if (from_list) {
+		for (int k = 0; k < mc->pair_count; ++k) {
+			sweep_pair(&pass, mc->pairs[k].type, mc->pairs[k].v);
+		}
+		return pass.hits;
+	}
+	fit_boxes(sim, mc, true, distance);
+	traverse_objects(mc, &pass);
+	return pass.hits;
+}
+
+#define ZONE_ROUNDS 12
+#define FREEZE_ROUNDS 12
+
+void plait_mesh_contacts_failsafe(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc == NULL || !mc->active) {
+		return;
+	}
+	plait_particles *p = &sim->particles;
+	float distance = FAILSAFE_DISTANCE;
+	for (int round = 0; round < ZONE_ROUNDS + FREEZE_ROUNDS; ++round) {
+		int hits = find_crossings(sim, mc, distance, round == 0 && list_covers(sim, mc, true));
+		if (hits == 0) {
+			break;
+		}
+		forget_rest_bounds(mc); /* the zones move vertices after their pairs were measured */
+		sim->ccd_hits += hits;
+		/* Zone by zone: members sorted by root. */
+		for (int k = 0; k < mc->touched_count; ++k) {
+			int i = mc->touched[k];
+			mc->members[k][0] = zone_root(mc->zone_parent, i);
+			mc->members[k][1] = i;
+		}
+		qsort(mc->members, (size_t)mc->touched_count, sizeof *mc->members, compare_members);
+		for (int start = 0; start < mc->touched_count;) {
+			int end = start + 1;
+			while (end < mc->touched_count && mc->members[end][0] == mc->members[start][0]) {
+				++end;
+			}
+			if (round < ZONE_ROUNDS) {
+				rigidify(p, mc->members, start, end);
+			} else {
+				/* Still crossing: back to where the substep began, which was free. */
+				for (int k = start; k < end; ++k) {
+					int i = mc->members[k][1];
+					if (p->point[i].w > 0.0f) {
+						p->point[i].x = p->x_prev[i];
+					}
+				}
+			}
+			sim->failsafe += 1;
+			start = end;
+		}
+	}
+	for (int k = 0; k < mc->touched_count; ++k) {
+		mc->zone_parent[mc->touched[k]] = -1;
+	}
+	mc->touched_count = 0;
+}

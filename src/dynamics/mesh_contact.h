@@ -1,0 +1,42 @@
+/* Space-time collisions between the simplices of deforming objects (paper §7): the triangles of
+ * cloths, the segments of curves and loose particles, against each other and (when an object
+ * self-collides) against themselves. Two stages:
+ *
+ * Contacts, inside the collision iterations of the schedule. At the first collision iteration
+ * of a substep the candidate pairs are gathered once: primitives (vertex-triangle, edge-edge,
+ * vertex-edge, vertex-vertex) whose paths over the substep may come within their contact
+ * distance (the sum of their thicknesses). Each collision iteration then projects every pair
+ * to at least that distance apart, on the side it was on at the start of the substep (where the
+ * state is known to be free of intersections), shared by inverse mass, with Coulomb friction.
+ * Which side that is comes from the start of the substep and follows the pair as long as it
+ * does not cross: a pair whose side changed is asked of the continuous test (collision/ccd.h)
+ * whether it went through (then it is pushed back) or round (then the new side holds).
+ *
+ * Failsafe, at the end of the substep. Every pair is swept with the conservative continuous
+ * test from the start of the substep to the end; pairs that cross join impact zones (vertex
+ * sets merged by union-find) whose motion over the substep is made rigid, keeping their mean
+ * displacement and angular momentum (Provot 1997, Bridson et al. 2002), until no pair crosses.
+ * Zones that still cross after a fixed number of rounds are frozen at their start positions,
+ * which were free of intersections, so a substep never ends with primitives passed through each
+ * other (pinned vertices, which cannot be frozen, aside). */
+#ifndef PLAIT_DYNAMICS_MESH_CONTACT_H
+#define PLAIT_DYNAMICS_MESH_CONTACT_H
+
+#include "dynamics/sim.h"
+
+/* Whether any object takes part (so the stage has work). Builds the elements when objects came
+ * or went. False only when out of memory. */
+bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active);
+
+/* Starts a substep: the candidates are gathered at the first iteration. */
+void plait_mesh_contacts_begin_substep(plait_sim *sim);
+
+/* One collision iteration over the candidates; returns the contacts resolved. */
+int plait_mesh_contacts_project(plait_sim *sim);
+
+/* The end-of-substep guarantee; before the velocities are taken from the positions. */
+void plait_mesh_contacts_failsafe(plait_sim *sim);
+
+void plait_mesh_contacts_destroy(plait_sim *sim);
+
+#endif
