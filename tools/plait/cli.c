@@ -8,7 +8,7 @@
 static void plait_cli_usage(FILE *f)
 {
 	fprintf(f, "usage: plait run [SCENE.json] [--out DIR] [--frames N] [--format obj|pc2]\n"
-	           "       plait check DIR [--log FILE] [--tolerance METRES]\n"
+	           "       plait check DIR [--log FILE] [--tolerance METRES] [--threads N]\n"
 	           "       plait explain [SCENE.json] [--json]\n"
 	           "       plait --help | --version\n");
 }

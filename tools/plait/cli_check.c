@@ -40,6 +40,7 @@ static void plait_check_help(FILE *f)
 	           "  --log FILE            per-frame counts (default: DIR/check.jsonl; '-': stdout, and the\n"
 	           "                        summary goes to stderr)\n"
 	           "  --tolerance METRES    how deep a vertex must be inside a collider to count (default 1e-4)\n"
+	           "  --threads N           frames checked at once (default: the number of online processors)\n"
 	           "  -h, --help            this help\n\n"
 	           "Exit status: 0 every frame is clean, 1 some frame has crossing triangles or vertices\n"
 	           "inside colliders, 2 bad arguments or DIR cannot be read (not a finished run, a file cut\n"

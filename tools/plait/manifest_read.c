@@ -31,7 +31,7 @@ static bool plait_read_int(plait_manifest_reader *r, const json_t *json, const c
 {
 	const json_t *value = json_object_get(json, key);
 	char place[160];
-	snprintf(place, sizeof place, "%s%s", where, key);
+	snprintf(place, sizeof place, "%.100s%.40s", where, key); // key paths are short
 	if (!json_is_integer(value) || json_integer_value(value) < low || json_integer_value(value) > high) {
 		char what[96];
 		snprintf(what, sizeof what, "expected an integer from %lld to %lld", low, high);
@@ -66,7 +66,7 @@ static bool plait_read_vec3(plait_manifest_reader *r, const json_t *json, const 
                             plait_vec3 *out)
 {
 	char place[160];
-	snprintf(place, sizeof place, "%s%s", where, key);
+	snprintf(place, sizeof place, "%.100s%.40s", where, key); // key paths are short
 	return plait_read_vec3_value(r, json_object_get(json, key), place, out);
 }
 
@@ -81,7 +81,7 @@ static bool plait_read_choice(plait_manifest_reader *r, const json_t *json, cons
 		}
 	}
 	char place[160], what[160];
-	snprintf(place, sizeof place, "%s%s", where, key);
+	snprintf(place, sizeof place, "%.100s%.40s", where, key); // key paths are short
 	snprintf(what, sizeof what, "expected one of %s", words[0]);
 	for (int i = 1; i < count; ++i)
 		snprintf(what + strlen(what), sizeof what - strlen(what), ", %s", words[i]);
@@ -94,7 +94,7 @@ static bool plait_read_file_name(plait_manifest_reader *r, const json_t *json, c
 {
 	const char *text = json_string_value(json_object_get(json, key));
 	char place[160];
-	snprintf(place, sizeof place, "%s%s", where, key);
+	snprintf(place, sizeof place, "%.100s%.40s", where, key); // key paths are short
 	if (text == NULL || text[0] == '\0' || text[0] == '.' || strchr(text, '/') != NULL ||
 	    strchr(text, '\\') != NULL || strlen(text) >= size)
 		return plait_manifest_fail(r, place, "expected the name of a file in the same folder");
@@ -116,7 +116,7 @@ static bool plait_read_shape(plait_manifest_reader *r, const json_t *json, const
 	if (!json_is_object(json))
 		return plait_manifest_fail(r, where, "expected an object");
 	char place[160];
-	snprintf(place, sizeof place, "%s.", where);
+	snprintf(place, sizeof place, "%.100s.", where);
 	switch (type) {
 	case PLAIT_SHAPE_PLANE:
 		return plait_read_vec3(r, json, "point", place, &shape->point) &&
@@ -133,7 +133,7 @@ static bool plait_read_shape(plait_manifest_reader *r, const json_t *json, const
 		    !plait_read_vec3(r, json, "half_extents", place, &shape->half_extents))
 			return false;
 		const json_t *axes = json_object_get(json, "axes");
-		snprintf(place, sizeof place, "%s.axes", where);
+		snprintf(place, sizeof place, "%.100s.axes", where);
 		if (!json_is_array(axes) || json_array_size(axes) != 3)
 			return plait_manifest_fail(r, place, "expected three [x, y, z]");
 		for (size_t k = 0; k < 3; ++k)
