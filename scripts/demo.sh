@@ -18,7 +18,7 @@ echo "==> running the demo"
 rm -rf out/demo
 build/tools/plait/plait run --out out/demo
 
-objs=(out/demo/*.obj)
+objs=(out/demo/cloth.*.obj)
 stats=out/demo/stats.jsonl
 last=$(tail -n 1 "$stats")
 # stats.jsonl has one flat JSON object per line; pull a number out of the last one.
@@ -27,8 +27,9 @@ field() { sed -n "s/.*\"$1\":\([^,}]*\).*/\1/p" <<<"$last"; }
 cat <<EOT
 
 Wrote $root/out/demo/:
-  ${#objs[@]} OBJ meshes, ${objs[0]##*/} (the start) to ${objs[-1]##*/}, one per frame at 24 fps
-  stats.jsonl, one line of statistics per frame
+  ${#objs[@]} OBJ meshes, ${objs[0]##*/} (the start) to ${objs[-1]##*/}, one per frame at 24 fps,
+  and as many of the sphere and the ground (sphere.*.obj, ground.*.obj)
+  stats.jsonl, one line of statistics per frame; manifest.json, what was written
 
 Last frame: frame $(field frame), kinetic energy $(field kinetic_energy) J, max strain $(field max_strain),\
  penetrations $(field penetrations), contacts $(field contacts)
@@ -37,8 +38,10 @@ To look at it:
   - one frame in any mesh viewer, e.g. the end: out/demo/${objs[-1]##*/}
   - the animation in Blender: write a point cache as well,
       build/tools/plait/plait run --out out/demo --format pc2
-    then File > Import > Wavefront (.obj) out/demo/${objs[0]##*/}, add a Mesh Cache modifier
+    then File > Import > Wavefront (.obj) out/demo/cloth.obj, add a Mesh Cache modifier
     to it and open out/demo/cloth.pc2 (format PC2); scrub the timeline. Scenes are Y-up:
     if the cloth moves on its side, set the modifier's Up axis to +Y.
+  - crossing triangles and vertices inside colliders, frame by frame:
+      build/tools/plait/plait check out/demo
   - other scenes: build/tools/plait/plait run scenes/flag.json --out out/flag
 EOT

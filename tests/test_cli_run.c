@@ -89,9 +89,9 @@ Test(cli_run, obj_output_names_and_contents)
 	cli_result r = run_cli(5, argv);
 	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
 
-	// Frames 0..3 of each object with vertices; none for the collider.
-	static const char *const names[] = {"sheet", "rope", "dots"};
-	for (int o = 0; o < 3; ++o) {
+	// Frames 0..3 of each object, the collider's surface included.
+	static const char *const names[] = {"sheet", "rope", "dots", "ground"};
+	for (int o = 0; o < 4; ++o) {
 		for (int f = 0; f <= 3; ++f) {
 			char name[64];
 			snprintf(name, sizeof name, "%s.%04d.obj", names[o], f);
@@ -99,9 +99,9 @@ Test(cli_run, obj_output_names_and_contents)
 		}
 	}
 	cr_expect(!exists(out_dir, "sheet.0004.obj"));
-	cr_expect(!exists(out_dir, "ground.0000.obj"));
-	cr_expect_eq(count_files(out_dir, ".obj"), 12);
+	cr_expect_eq(count_files(out_dir, ".obj"), 16);
 	cr_expect_eq(count_files(out_dir, ".tmp"), 0);
+	cr_expect(exists(out_dir, "manifest.json"));
 
 	char path[1024];
 	snprintf(path, sizeof path, "%s/sheet.0000.obj", out_dir);
@@ -127,6 +127,13 @@ Test(cli_run, obj_output_names_and_contents)
 	cr_expect_eq(count_lines_starting(text, "v "), 2);
 	cr_expect_eq(count_lines_starting(text, "l "), 0);
 	cr_expect_eq(count_lines_starting(text, "f "), 0);
+	free(text);
+
+	// The ground plane as a square of two triangles.
+	snprintf(path, sizeof path, "%s/ground.0001.obj", out_dir);
+	text = read_file(path, NULL);
+	cr_expect_eq(count_lines_starting(text, "v "), 4);
+	cr_expect_eq(count_lines_starting(text, "f "), 2);
 	free(text);
 
 	cr_expect(strstr(r.out, out_dir) != NULL, "the summary does not say where: %s", r.out);
@@ -221,13 +228,15 @@ Test(cli_run, pc2_header_and_sample_count)
 	const char *argv[] = {"plait", "run", scene, "--out", dir, "--format", "pc2", "--frames", "4"};
 	cli_result r = run_cli(9, argv);
 	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
-	cr_expect_eq(count_files(dir, ".obj"), 0);
+	// One mesh beside each cache, and no frame files.
+	cr_expect_eq(count_files(dir, ".obj"), 4);
+	cr_expect(exists(dir, "sheet.obj") && exists(dir, "ground.obj"));
 	cr_expect_eq(count_files(dir, ".tmp"), 0);
 	static const struct {
 		const char *name;
 		uint32_t points;
-	} caches[] = {{"sheet.pc2", 9}, {"rope.pc2", 3}, {"dots.pc2", 2}};
-	for (int i = 0; i < 3; ++i) {
+	} caches[] = {{"sheet.pc2", 9}, {"rope.pc2", 3}, {"dots.pc2", 2}, {"ground.pc2", 4}};
+	for (int i = 0; i < 4; ++i) {
 		char path[1024];
 		snprintf(path, sizeof path, "%s/%s", dir, caches[i].name);
 		size_t size = 0;

@@ -411,6 +411,43 @@ typedef struct plait_intersection_report {
 plait_result plait_world_check_intersections(plait_world_id world, plait_intersection_report *report,
                                              plait_error *error);
 
+/* Whether two triangles intersect: an edge of one crosses the other, borders included (touching
+ * counts); coplanar overlaps are not counted. Orientation signs in double precision: the test
+ * plait_world_check_intersections and `plait check` count with. */
+bool plait_triangles_intersect(const plait_vec3 a[3], const plait_vec3 b[3]);
+
+/* ---- Collider geometry where the collider is now (for writing it out and checking results) -- */
+
+/* "Now" is the end of the last step (or creation): a transform set for the next frame is not
+ * applied yet. Scene units, world space. */
+typedef struct plait_collider_shape {
+	plait_shape_type type;
+	plait_vec3 point, normal; /* plane: a point on it and its unit normal (solid below) */
+	plait_vec3 center;        /* sphere, box */
+	float radius;             /* sphere, capsule */
+	plait_vec3 a, b;          /* capsule segment ends */
+	plait_vec3 half_extents;  /* box */
+	plait_vec3 axes[3];       /* box: unit directions of its own x, y and z */
+} plait_collider_shape;
+
+plait_result plait_collider_get_shape(plait_object_id collider, plait_collider_shape *shape, plait_error *error);
+
+/* Whether the collider has an inside: spheres, capsules and boxes do, planes do not, and a mesh
+ * does when every edge joins exactly two triangles. For a mesh this sorts its edges: ask once. */
+bool plait_collider_is_closed(plait_object_id collider);
+
+/* The collider's surface as triangles that never change and vertices that follow it: a mesh's
+ * own triangles (polygons fanned); a sphere or capsule tessellated (64 segments around) with
+ * every vertex on the surface, so the triangles lie inside the true shape; a box's 12
+ * triangles; a plane as a square PLAIT_COLLIDER_PLANE_SIZE across centred on its point.
+ * Triangles wind counter-clockwise seen from outside. get_surface_triangles writes 3*capacity
+ * ints at most (indices may be NULL) and returns the triangle count; 0 for a non-collider. */
+#define PLAIT_COLLIDER_PLANE_SIZE 20.0f
+int plait_collider_get_surface_vertex_count(plait_object_id collider);
+int plait_collider_get_surface_triangles(plait_object_id collider, int *indices, int capacity);
+plait_result plait_collider_get_surface_positions(plait_object_id collider, int first, int count,
+                                                  plait_vec3 *out, plait_error *error);
+
 #ifdef __cplusplus
 }
 #endif

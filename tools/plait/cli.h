@@ -10,8 +10,8 @@
 
 /* Exit codes. */
 #define PLAIT_EXIT_OK 0
-#define PLAIT_EXIT_FAILURE 1 /* bad scene, failed simulation, cannot write */
-#define PLAIT_EXIT_USAGE 2   /* bad command-line arguments */
+#define PLAIT_EXIT_FAILURE 1 /* bad scene, failed simulation, cannot write; check: problems found */
+#define PLAIT_EXIT_USAGE 2   /* bad command-line arguments; check: cannot read what it should check */
 
 /* `plait ARGS...`: argv[0] is the program name. Normal output goes to out, messages to err. */
 int plait_cli_main(int argc, char **argv, FILE *out, FILE *err);
@@ -29,9 +29,15 @@ typedef struct plait_run_options {
 /* `plait run` once its arguments are parsed; returns an exit code. */
 int plait_run(const plait_run_options *options, FILE *out, FILE *err);
 
-/* `plait run ARGS...` and `plait explain ARGS...` with argv[0] the subcommand. */
+/* `plait run ARGS...`, `plait check ARGS...` and `plait explain ARGS...` with argv[0] the
+ * subcommand. */
 int plait_cli_run(int argc, char **argv, FILE *out, FILE *err);
+int plait_cli_check(int argc, char **argv, FILE *out, FILE *err);
 int plait_cli_explain(int argc, char **argv, FILE *out, FILE *err);
+
+/* Value of "--name VALUE" or "--name=VALUE" at argv[*i] (advancing *i past VALUE); NULL if
+ * argv[*i] is not that option, with *missing set when it is but VALUE is not there. */
+const char *plait_cli_option_value(int argc, char **argv, int *i, const char *name, bool *missing);
 
 /* Loads the scene at path, or the demo when path is NULL. */
 bool plait_cli_load_scene(const char *path, plait_scene *scene, plait_tool_error *error);

@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include "files.h"
+#include "manifest.h"
 #include "scene.h"
 #include "stats_log.h"
 #include "thread_pool.h"
@@ -21,11 +22,13 @@ static void plait_run_help(FILE *f)
 {
 	plait_run_usage(f);
 	fprintf(f, "\nSimulates SCENE.json (without it, a built-in demo: cloth falling on a sphere) and writes\n"
-	           "frame 0 and every simulated frame to DIR, plus DIR/stats.jsonl with one line per frame.\n\n"
+	           "frame 0 and every simulated frame of every object, colliders included, to DIR, plus\n"
+	           "DIR/stats.jsonl with one line per frame and, once done, DIR/manifest.json, which lets\n"
+	           "`plait check DIR` read the frames back.\n\n"
 	           "  --out DIR        output folder, created if missing (default: out)\n"
 	           "  --frames N       frames to simulate (default: the scene's \"frames\")\n"
 	           "  --format FORMAT  obj: DIR/NAME.FRAME.obj per object and frame (default)\n"
-	           "                   pc2: DIR/NAME.pc2 point cache per object\n"
+	           "                   pc2: DIR/NAME.pc2 point cache and DIR/NAME.obj mesh per object\n"
 	           "  --check          count, every frame, crossing cloth triangles (between cloths and\n"
 	           "                   within each) and vertices inside colliders, into stats.jsonl\n");
 	fprintf(f,
@@ -43,25 +46,6 @@ static double plait_now_seconds(void)
 	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-// Value of "--name VALUE" or "--name=VALUE" at argv[*i]; NULL if argv[*i] is not that option.
-static const char *plait_option_value(int argc, char **argv, int *i, const char *name, bool *missing)
-{
-	size_t n = strlen(name);
-	const char *arg = argv[*i];
-	if (strncmp(arg, name, n) != 0)
-		return NULL;
-	if (arg[n] == '=')
-		return arg + n + 1;
-	if (arg[n] != '\0')
-		return NULL;
-	if (*i + 1 >= argc) {
-		*missing = true;
-		return NULL;
-	}
-	*i += 1;
-	return argv[*i];
-}
-
 int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 {
 	plait_run_options options = {.out_dir = "out",
@@ -77,14 +61,14 @@ int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 			return PLAIT_EXIT_OK;
 		} else if (strcmp(arg, "--check") == 0) {
 			options.check = true;
-		} else if ((value = plait_option_value(argc, argv, &i, "--out", &missing)) != NULL) {
+		} else if ((value = plait_cli_option_value(argc, argv, &i, "--out", &missing)) != NULL) {
 			if (value[0] == '\0') {
 				fprintf(err, "plait run: --out needs a folder name\n");
 				plait_run_usage(err);
 				return PLAIT_EXIT_USAGE;
 			}
 			options.out_dir = value;
-		} else if ((value = plait_option_value(argc, argv, &i, "--frames", &missing)) != NULL) {
+		} else if ((value = plait_cli_option_value(argc, argv, &i, "--frames", &missing)) != NULL) {
 			char *end;
 			long frames = strtol(value, &end, 10);
 			if (end == value || *end != '\0' || frames < 0 || frames > 1000000) {
@@ -94,7 +78,7 @@ int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 				return PLAIT_EXIT_USAGE;
 			}
 			options.frames = (int)frames;
-		} else if ((value = plait_option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
+		} else if ((value = plait_cli_option_value(argc, argv, &i, "--threads", &missing)) != NULL) {
 			char *end;
 			long threads = strtol(value, &end, 10);
 			if (end == value || *end != '\0' || threads < 1 || threads > PLAIT_THREAD_POOL_MAX_THREADS) {
@@ -104,7 +88,7 @@ int plait_cli_run(int argc, char **argv, FILE *out, FILE *err)
 				return PLAIT_EXIT_USAGE;
 			}
 			options.threads = (int)threads;
-		} else if ((value = plait_option_value(argc, argv, &i, "--format", &missing)) != NULL) {
+		} else if ((value = plait_cli_option_value(argc, argv, &i, "--format", &missing)) != NULL) {
 			options.format = plait_writer_find_format(value);
 			if (options.format == NULL) {
 				fprintf(err, "plait run: unknown format '%s' (expected obj or pc2)\n", value);
@@ -141,6 +125,7 @@ static void plait_run_progress(FILE *err, int frame, int frames, double step_ms,
 
 typedef struct plait_run_outputs {
 	plait_writer *writer;
+	plait_manifest manifest;
 	plait_stats_log stats;
 	bool check;
 } plait_run_outputs;
@@ -156,6 +141,7 @@ static bool plait_run_write(plait_run_outputs *outputs, plait_world_id world, in
 			return plait_tool_error_set(error, "frame %d: intersection check: %s", frame, core_error.message);
 	}
 	return plait_writer_write_frame(outputs->writer, frame, error) &&
+	       plait_manifest_record_frame(&outputs->manifest, outputs->writer, frame, error) &&
 	       plait_stats_log_write(&outputs->stats, frame, ms, &stats, outputs->check ? &report : NULL, error);
 }
 
@@ -204,8 +190,10 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 		return PLAIT_EXIT_FAILURE;
 	}
 	outputs.writer = plait_writer_open(options->format, options->out_dir, world, &error);
-	if (outputs.writer == NULL) {
+	if (outputs.writer == NULL || !plait_manifest_begin(&outputs.manifest, outputs.writer, &scene, &error)) {
 		fprintf(err, "plait: %s\n", error.message);
+		plait_writer_close(outputs.writer, NULL);
+		plait_manifest_free(&outputs.manifest);
 		plait_atomic_abort(&outputs.stats.file);
 		plait_destroy_world(world);
 		plait_scene_free(&scene);
@@ -251,18 +239,22 @@ int plait_run(const plait_run_options *options, FILE *out, FILE *err)
 	if (options->progress && done > 0)
 		fprintf(err, "\r%60s\r", "");
 	// Finish the files even after a failure: the frames written so far stay usable.
+	// The manifest goes last: it vouches for the frames before it.
 	int objects_written = outputs.writer->object_count;
-	if (!plait_writer_close(outputs.writer, &error) || !plait_stats_log_close(&outputs.stats, &error)) {
+	if (!plait_writer_close(outputs.writer, &error) || !plait_stats_log_close(&outputs.stats, &error) ||
+	    !plait_manifest_commit(&outputs.manifest, options->out_dir, &error)) {
 		fprintf(err, "plait: %s\n", error.message);
 		plait_atomic_abort(&outputs.stats.file);
 		status = PLAIT_EXIT_FAILURE;
 	}
+	plait_manifest_free(&outputs.manifest);
 	if (status == PLAIT_EXIT_OK) {
 		double seconds = plait_now_seconds() - start;
 		fprintf(out, "plait: simulated %d frame%s of %s in %.2f s (%.1f ms/frame in the solver)\n", done,
 		        done == 1 ? "" : "s", scene.file, seconds, done > 0 ? step_total_ms / done : 0.0);
-		fprintf(out, "plait: wrote frames 0 to %d of %d object%s as %s, and stats.jsonl, to %s/\n", done,
-		        objects_written, objects_written == 1 ? "" : "s", options->format->name, options->out_dir);
+		fprintf(
+		    out, "plait: wrote frames 0 to %d of %d object%s as %s, stats.jsonl and manifest.json, to %s/\n",
+		    done, objects_written, objects_written == 1 ? "" : "s", options->format->name, options->out_dir);
 	}
 	plait_destroy_world(world);
 	plait_scene_free(&scene);

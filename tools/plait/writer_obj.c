@@ -1,6 +1,6 @@
 /* Wavefront OBJ, one file per object per frame: DIR/NAME.FRAME.obj (frame zero-padded to 4
- * digits). Cloth faces are written as given (quads stay quads), curves as one polyline, particles
- * as bare vertices. Indices are 1-based. */
+ * digits). Cloth faces are written as given (quads stay quads), collider surfaces as triangles,
+ * curves as one polyline, particles as bare vertices. Indices are 1-based. */
 #include "files.h"
 #include "writers.h"
 
@@ -11,15 +11,13 @@ static bool plait_obj_open(plait_writer *writer, plait_tool_error *error)
 	return true;
 }
 
-static bool plait_obj_write_object(plait_writer *writer, const plait_output_object *object, int frame,
-                                   plait_tool_error *error)
+bool plait_writer_write_obj(plait_writer *writer, const plait_output_object *object, const char *file_name,
+                            int frame, plait_tool_error *error)
 {
 	if (!plait_writer_read_positions(writer, object, error))
 		return false;
-	char name[96];
-	snprintf(name, sizeof name, "%s.%04d.obj", object->name, frame);
 	plait_atomic_file out;
-	if (!plait_atomic_open(&out, writer->dir, name, error))
+	if (!plait_atomic_open(&out, writer->dir, file_name, error))
 		return false;
 	FILE *f = out.file;
 	fprintf(f, "# plait %d.%d.%d: object %s, frame %d\n", PLAIT_VERSION_MAJOR, PLAIT_VERSION_MINOR,
@@ -49,9 +47,12 @@ static bool plait_obj_write_object(plait_writer *writer, const plait_output_obje
 
 static bool plait_obj_write_frame(plait_writer *writer, int frame, plait_tool_error *error)
 {
-	for (int i = 0; i < writer->object_count; ++i)
-		if (!plait_obj_write_object(writer, &writer->objects[i], frame, error))
+	for (int i = 0; i < writer->object_count; ++i) {
+		char name[96];
+		snprintf(name, sizeof name, "%s.%04d.obj", writer->objects[i].name, frame);
+		if (!plait_writer_write_obj(writer, &writer->objects[i], name, frame, error))
 			return false;
+	}
 	return true;
 }
 

@@ -1,7 +1,9 @@
 /* PC2 point caches (Blender, 3ds Max), one DIR/NAME.pc2 per object, little endian:
  *   char[12] "POINTCACHE2\0", int32 version = 1, int32 numPoints, float32 startFrame,
  *   float32 sampleRate, int32 numSamples, then numSamples * numPoints float32 x, y, z.
- * numSamples is known only at the end: it is patched in before the file is renamed into place. */
+ * numSamples is known only at the end: it is patched in before the file is renamed into place.
+ * Beside each cache, DIR/NAME.obj holds the mesh it animates (faces, and the positions at open):
+ * what Blender's Mesh Cache modifier is put on, and where `plait check` finds the topology. */
 #include "files.h"
 #include "writers.h"
 
@@ -63,6 +65,11 @@ static bool plait_pc2_open(plait_writer *writer, plait_tool_error *error)
 	for (int i = 0; i < writer->object_count; ++i) {
 		const plait_output_object *object = &writer->objects[i];
 		char name[96];
+		snprintf(name, sizeof name, "%s.obj", object->name);
+		if (!plait_writer_write_obj(writer, object, name, 0, error)) {
+			plait_pc2_free(writer);
+			return false;
+		}
 		snprintf(name, sizeof name, "%s.pc2", object->name);
 		if (!plait_atomic_open(&state->files[i], writer->dir, name, error)) {
 			plait_pc2_free(writer);

@@ -36,7 +36,35 @@ static void plait_writer_free(plait_writer *writer)
 	free(writer);
 }
 
-// Lists the objects that have vertices, with cloth faces read once.
+// Reads a cloth's faces, or a collider surface's triangles as faces of 3.
+static bool plait_writer_read_faces(plait_output_object *object, plait_tool_error *error)
+{
+	int index_count = 0, face_count = 0;
+	if (object->type == PLAIT_OBJECT_CLOTH) {
+		face_count = plait_object_get_faces(object->id, NULL, NULL, &index_count);
+	} else if (object->type == PLAIT_OBJECT_COLLIDER) {
+		face_count = plait_collider_get_surface_triangles(object->id, NULL, 0);
+		index_count = 3 * face_count;
+	}
+	if (face_count <= 0)
+		return true;
+	object->face_sizes = malloc(sizeof(int) * (size_t)face_count);
+	object->face_indices = malloc(sizeof(int) * (size_t)index_count);
+	if (object->face_sizes == NULL || object->face_indices == NULL)
+		return plait_tool_error_set(error, "out of memory");
+	if (object->type == PLAIT_OBJECT_CLOTH) {
+		object->face_count =
+		    plait_object_get_faces(object->id, object->face_sizes, object->face_indices, &index_count);
+	} else {
+		object->face_count =
+		    plait_collider_get_surface_triangles(object->id, object->face_indices, face_count);
+		for (int i = 0; i < object->face_count; ++i)
+			object->face_sizes[i] = 3;
+	}
+	return true;
+}
+
+// Lists the objects that have vertices, with their faces read once.
 static bool plait_writer_collect(plait_writer *writer, plait_tool_error *error)
 {
 	int count = plait_world_get_object_count(writer->world);
@@ -46,12 +74,15 @@ static bool plait_writer_collect(plait_writer *writer, plait_tool_error *error)
 	int most_vertices = 1;
 	for (int i = 0; i < count; ++i) {
 		plait_object_id id = plait_world_get_object(writer->world, i);
-		int vertex_count = plait_object_get_vertex_count(id);
-		if (plait_object_get_type(id) == PLAIT_OBJECT_COLLIDER || vertex_count <= 0)
+		plait_object_type type = plait_object_get_type(id);
+		int vertex_count = type == PLAIT_OBJECT_COLLIDER ? plait_collider_get_surface_vertex_count(id)
+		                                                 : plait_object_get_vertex_count(id);
+		if (vertex_count <= 0)
 			continue;
 		plait_output_object *object = &writer->objects[writer->object_count++];
 		object->id = id;
-		object->type = plait_object_get_type(id);
+		object->world_index = i;
+		object->type = type;
 		object->vertex_count = vertex_count;
 		const char *name = plait_object_get_name(id);
 		if (name != NULL && name[0] != '\0')
@@ -59,16 +90,8 @@ static bool plait_writer_collect(plait_writer *writer, plait_tool_error *error)
 		else
 			snprintf(object->name, sizeof object->name, "object%d", i);
 		most_vertices = vertex_count > most_vertices ? vertex_count : most_vertices;
-		if (object->type == PLAIT_OBJECT_CLOTH) {
-			int index_count = 0;
-			int face_count = plait_object_get_faces(id, NULL, NULL, &index_count);
-			object->face_sizes = malloc(sizeof(int) * (size_t)(face_count > 0 ? face_count : 1));
-			object->face_indices = malloc(sizeof(int) * (size_t)(index_count > 0 ? index_count : 1));
-			if (object->face_sizes == NULL || object->face_indices == NULL)
-				return plait_tool_error_set(error, "out of memory");
-			object->face_count =
-			    plait_object_get_faces(id, object->face_sizes, object->face_indices, &index_count);
-		}
+		if (!plait_writer_read_faces(object, error))
+			return false;
 	}
 	writer->positions = malloc(sizeof(plait_vec3) * (size_t)most_vertices);
 	if (writer->positions == NULL)
@@ -121,8 +144,12 @@ bool plait_writer_read_positions(plait_writer *writer, const plait_output_object
                                  plait_tool_error *error)
 {
 	plait_error core_error = {0};
-	if (plait_object_get_positions(object->id, 0, object->vertex_count, writer->positions, &core_error) !=
-	    PLAIT_OK)
+	plait_result result =
+	    object->type == PLAIT_OBJECT_COLLIDER
+	        ? plait_collider_get_surface_positions(object->id, 0, object->vertex_count, writer->positions,
+	                                               &core_error)
+	        : plait_object_get_positions(object->id, 0, object->vertex_count, writer->positions, &core_error);
+	if (result != PLAIT_OK)
 		return plait_tool_error_set(error, "cannot read positions of \"%s\": %s", object->name,
 		                            core_error.message);
 	return true;

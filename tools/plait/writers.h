@@ -1,5 +1,6 @@
 /* Writing simulated frames to files. A table of formats (obj, pc2) behind one interface:
- * open for a world, write frame after frame, close. Colliders are not written. */
+ * open for a world, write frame after frame, close. Colliders are written as their surface
+ * meshes (plait_collider_get_surface_*), which follow their keyframes. */
 #ifndef PLAIT_WRITERS_H
 #define PLAIT_WRITERS_H
 
@@ -11,10 +12,11 @@
 /* One object whose vertices are written, with what was read once at open. */
 typedef struct plait_output_object {
 	plait_object_id id;
+	int world_index; /* plait_world_get_object(world, world_index) == id */
 	plait_object_type type;
 	char name[64];
-	int vertex_count;
-	int *face_sizes; /* cloth only */
+	int vertex_count; /* a collider's: its surface's */
+	int *face_sizes;  /* cloth: its faces; collider: its surface's triangles */
 	int *face_indices;
 	int face_count;
 } plait_output_object;
@@ -56,6 +58,11 @@ bool plait_writer_close(plait_writer *writer, plait_tool_error *error);
 /* Reads an output object's positions into writer->positions. */
 bool plait_writer_read_positions(plait_writer *writer, const plait_output_object *object,
                                  plait_tool_error *error);
+
+/* Writes the object as it is now to DIR/file_name in OBJ (writer_obj.c): the frame files of
+ * --format obj, and the meshes that go with --format pc2's point caches. */
+bool plait_writer_write_obj(plait_writer *writer, const plait_output_object *object, const char *file_name,
+                            int frame, plait_tool_error *error);
 
 extern const plait_writer_format plait_writer_obj;
 extern const plait_writer_format plait_writer_pc2;
