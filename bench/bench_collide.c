@@ -9,6 +9,7 @@
  *   scene=pile n=64 threads=1 ms=12.3 collision=0.41 worst_crossings=0 crossing_frames=0 ...
  *
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
+ *                      [--verbose] (frames with crossings or vertices inside colliders)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
 #include <stdio.h>
@@ -42,7 +43,7 @@ typedef struct run_result {
 	bool failed;
 } run_result;
 
-static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check)
+static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose)
 {
 	run_result r = {0};
 	plait_world_def def = plait_default_world_def();
@@ -79,6 +80,10 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 			plait_intersection_report report;
 			plait_world_check_intersections(scene.world, &report, NULL);
 			r.crossing_frames += report.triangle_pairs > 0;
+			if (verbose && (report.triangle_pairs > 0 || report.inside_colliders > 0)) {
+				printf("  frame %d: crossings %d inside %d\n", f + 1, report.triangle_pairs,
+				       report.inside_colliders);
+			}
 			if (report.triangle_pairs > r.worst_crossings) {
 				r.worst_crossings = report.triangle_pairs;
 			}
@@ -101,7 +106,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 
 int main(int argc, char **argv)
 {
-	bool chosen[SCENE_COUNT] = {false}, any = false, check = true;
+	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false;
 	int n = 0, frames = 0, runs = 1, threads = 1;
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
@@ -114,6 +119,8 @@ int main(int argc, char **argv)
 			threads = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--no-check") == 0) {
 			check = false;
+		} else if (strcmp(argv[a], "--verbose") == 0) {
+			verbose = true;
 		} else {
 			int k = 0;
 			while (k < SCENE_COUNT && strcmp(argv[a], collide_scene_names[k]) != 0) {
@@ -122,7 +129,7 @@ int main(int argc, char **argv)
 			if (k == SCENE_COUNT || runs < 1) {
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
-				        "[--no-check]\n  SCENE: drape thin-box pile twist arm hang-self\n");
+				        "[--no-check] [--verbose]\n  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
 			chosen[k] = any = true;
@@ -136,7 +143,7 @@ int main(int argc, char **argv)
 		double *ms = malloc(sizeof(double) * (size_t)runs);
 		run_result last = {0};
 		for (int r = 0; r < runs; ++r) {
-			last = run((collide_scene_kind)k, n, frames, threads, check);
+			last = run((collide_scene_kind)k, n, frames, threads, check, verbose);
 			ms[r] = last.ms;
 		}
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);

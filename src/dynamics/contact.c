@@ -262,6 +262,7 @@ typedef struct collider_job {
 	const plait_collider *c;
 	bool bounded;
 	vec3 world_lower, world_upper; /* box of the collider over the substep, grown */
+	const int *indices;            /* the particles to test, or NULL for all */
 	_Atomic int contacts;
 } collider_job;
 
@@ -277,7 +278,8 @@ static void collide_collider_range(void *context, int begin, int end)
 	bool bounded = job->bounded;
 	vec3 world_lower = job->world_lower, world_upper = job->world_upper;
 	int contacts = 0;
-	for (int i = begin; i < end; ++i) {
+	for (int k = begin; k < end; ++k) {
+		int i = job->indices != NULL ? job->indices[k] : k;
 		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->point[i].w == 0.0f) {
 			continue;
 		}
@@ -349,7 +351,8 @@ static void collide_collider_range(void *context, int begin, int end)
 
 #define COLLIDER_GRAIN 1024
 
-static int collide_with_collider(plait_sim *sim, const plait_collider *c)
+/* Particles indices[0, count) (all particles when indices is NULL) against collider c. */
+static int collide_with_collider(plait_sim *sim, const plait_collider *c, const int *indices, int count)
 {
 	plait_particles *p = &sim->particles;
 	const plait_rigid *r0 = &c->rigid_start, *r1 = &c->rigid_end;
@@ -372,8 +375,9 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c)
 		world_lower = v3_sub(world_lower, v3(grow, grow, grow));
 		world_upper = v3_add(world_upper, v3(grow, grow, grow));
 	}
-	collider_job job = {sim, c, bounded, world_lower, world_upper, 0};
-	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, p->count, COLLIDER_GRAIN);
+	collider_job job = {sim, c, bounded, world_lower, world_upper, indices, 0};
+	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
+	                   COLLIDER_GRAIN);
 	return atomic_load_explicit(&job.contacts, memory_order_relaxed);
 }
 
@@ -567,10 +571,28 @@ void plait_collide(plait_sim *sim)
 	}
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
-			contacts += collide_with_collider(sim, &sim->colliders[k]);
+			contacts += collide_with_collider(sim, &sim->colliders[k], NULL, 0);
+		}
+	}
+	/* Where colliders meet (an elbow), pushing a particle out of one can push it into another:
+	 * back over them in reverse order, so that a particle in the crease settles outside both. */
+	for (int k = sim->collider_count - 2; k >= 0; --k) {
+		if (sim->colliders[k].collide) {
+			(void)collide_with_collider(sim, &sim->colliders[k], NULL, 0);
 		}
 	}
 	sim->contacts += contacts;
+}
+
+int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count)
+{
+	int contacts = 0;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		if (sim->colliders[k].collide) {
+			contacts += collide_with_collider(sim, &sim->colliders[k], indices, count);
+		}
+	}
+	return contacts;
 }
 
 void plait_contacts_end_substep(plait_sim *sim)

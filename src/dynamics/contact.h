@@ -24,6 +24,10 @@ bool plait_contacts_begin_substep(plait_sim *sim);
 /* One collision iteration. */
 void plait_collide(plait_sim *sim);
 
+/* The collider part of an iteration for the particles indices[0, count) only (after the
+ * failsafe moved them). */
+int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count);
+
 /* Restitution and stickiness on the contacts of the substep (after v = (x - x_prev) / h). */
 void plait_contacts_end_substep(plait_sim *sim);
 

@@ -7,6 +7,7 @@
 #include "collision/closest.h"
 #include "collision/element_tree.h"
 #include "collision/mesh_shape.h"
+#include "dynamics/contact.h"
 
 /* Primitive pairs. The first primitive's vertices come first in v[]. */
 typedef enum pair_type {
@@ -79,10 +80,11 @@ typedef struct plait_mesh_contacts {
 	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
 	 * long as no vertex is farther than its guard from where it was then (list_covers). */
 	vec3 *x_gather;
-	float *guard;     /* per particle: how far it may move relative to its object */
-	int *object_of;   /* per particle: its collision object, or -1 */
-	vec3 *shift;      /* per collision object: mean motion since the gather (scratch) */
-	float *allowance; /* per pair of objects: how far they may move relative to each other */
+	float *guard;       /* per particle: how far it may move relative to its object */
+	int *object_of;     /* per particle: its collision object, or -1 */
+	vec3 *shift;        /* per collision object: mean motion since the gather (scratch) */
+	int *object_counts; /* per collision object: scratch of object_shifts */
+	float *allowance;   /* per pair of objects: how far they may move relative to each other */
 	float allowance_max;
 	/* Failsafe scratch: union-find over particles, and the particles it touched. */
 	int particle_capacity;
@@ -125,6 +127,8 @@ static void free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
 	plait_free(a, mc->objects);
 	plait_free(a, mc->shift);
 	plait_free(a, mc->allowance);
+	plait_free(a, mc->object_counts);
+	mc->object_counts = NULL;
 	mc->shift = NULL;
 	mc->allowance = NULL;
 	plait_free(a, mc->excluded_start);
@@ -271,7 +275,8 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 		int objects = mc->object_count;
 		mc->shift = plait_alloc_zero(a, (size_t)objects, sizeof(vec3));
 		mc->allowance = plait_alloc_zero(a, (size_t)(objects * objects), sizeof(float));
-		ok = ok && mc->shift != NULL && mc->allowance != NULL;
+		mc->object_counts = plait_alloc_zero(a, (size_t)objects, sizeof(int));
+		ok = ok && mc->shift != NULL && mc->allowance != NULL && mc->object_counts != NULL;
 	}
 	plait_free(a, edges);
 	plait_free(a, owned);
@@ -943,7 +948,7 @@ static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const v
 	for (int k = 0; k < mc->object_count; ++k) {
 		mc->shift[k] = v3(0.0f, 0.0f, 0.0f);
 	}
-	int *counts = mc->touched; /* free outside the failsafe */
+	int *counts = mc->object_counts;
 	for (int k = 0; k < mc->object_count; ++k) {
 		counts[k] = 0;
 	}
@@ -1494,6 +1499,11 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 			}
 			sim->failsafe += 1;
 			start = end;
+		}
+		/* Colliders have the last word over the moved vertices too; the next round checks that
+		 * this crossed nothing. */
+		if (round < ZONE_ROUNDS) {
+			sim->contacts += plait_collide_listed_with_colliders(sim, mc->touched, mc->touched_count);
 		}
 	}
 	for (int k = 0; k < mc->touched_count; ++k) {
