@@ -1,16 +1,20 @@
 /* Deforming mesh colliders: a rising floor carries what rests on it and nothing ends below it, a
  * sliding floor carries by friction, an inflating sphere and a box sweeping at 60 m/s leave no
- * particle inside, the same positions come out with any thread count, and the API refuses bad
- * positions. */
+ * particle inside, the same positions come out with any thread count, the API refuses bad
+ * positions, and a scene's `sequence` of OBJ files drives the collider, every file checked
+ * before the run. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "collision/mesh_shape.h"
 #include "collision/moving_triangle.h"
+#include "scene.h"
+#include "test_cli.h"
 #include "test_support.h"
 #include "thread_pool.h"
 
@@ -612,4 +616,290 @@ Test(deforming_collider, failed_frame_puts_the_mesh_back)
 	cr_expect_float_eq(x.y, 0.55f, 2e-3f, "the particle is at y = %g", (double)x.y);
 	test_mesh_free(&floor);
 	plait_destroy_world(world);
+}
+
+/* ---- Scenes ---------------------------------------------------------------------------------- */
+
+static char *make_temp_dir(void)
+{
+	char *dir = strdup("/tmp/plait_sequence_test_XXXXXX");
+	cr_assert_not_null(mkdtemp(dir));
+	return dir;
+}
+
+static void write_text(const char *dir, const char *name, const char *text)
+{
+	char path[1024];
+	snprintf(path, sizeof path, "%s/%s", dir, name);
+	FILE *f = fopen(path, "wb");
+	cr_assert_not_null(f, "%s", path);
+	fputs(text, f);
+	fclose(f);
+}
+
+/* A 2 x 2 quad floor (9 vertices, 4 faces) at height y, written as an OBJ file. */
+static void write_floor(const char *dir, const char *name, float y)
+{
+	char text[1024];
+	int length = 0;
+	for (int j = 0; j <= 2; ++j)
+		for (int i = 0; i <= 2; ++i)
+			length += snprintf(text + length, sizeof text - (size_t)length, "v %g %g %g\n", (double)(i - 1),
+			                   (double)y, (double)(j - 1));
+	length +=
+	    snprintf(text + length, sizeof text - (size_t)length, "f 1 4 5 2\nf 2 5 6 3\nf 4 7 8 5\nf 5 8 9 6\n");
+	write_text(dir, name, text);
+}
+
+static void write_floor_frames(const char *dir, int first, int last)
+{
+	for (int frame = first; frame <= last; ++frame) {
+		char name[64];
+		snprintf(name, sizeof name, "floor.%04d.obj", frame);
+		write_floor(dir, name, 0.5f * (float)frame);
+	}
+}
+
+static const char *floor_scene =
+    "{\"world\": {\"fps\": 60, \"air_density\": 0}, \"frames\": 8, \"objects\": ["
+    "{\"name\": \"floor\", \"type\": \"collider\", \"shape\": \"mesh\", "
+    "\"mesh\": \"floor.obj\", \"sequence\": \"floor.%04d.obj\"},"
+    "{\"name\": \"dots\", \"type\": \"particles\", \"radius\": 0.02,"
+    " \"positions\": [[0, 0.02, 0], [0.4, 0.02, -0.3]]}]}";
+
+/* Frames 1 to 5 rise 0.5 m each; from frame 6 the last file's shape holds. A file for frame 0
+ * is not read: `mesh` is the shape at frame 0 (here it is not even a mesh). */
+Test(deforming_collider, scene_sequence_drives_the_collider)
+{
+	char *dir = make_temp_dir();
+	write_floor(dir, "floor.obj", 0.0f);
+	write_floor_frames(dir, 1, 5);
+	write_text(dir, "floor.0000.obj", "not a mesh\n");
+	plait_scene scene;
+	plait_tool_error error;
+	cr_assert(plait_scene_load_string(floor_scene, "scene.json", dir, &scene, &error), "%s", error.message);
+	cr_assert_eq(scene.objects[0].sequence.frame_count, 5);
+	plait_world_id world;
+	cr_assert(plait_scene_create_world(&scene, &world, &error), "%s", error.message);
+	plait_object_id floor = plait_world_get_object(world, 0), dots = plait_world_get_object(world, 1);
+	for (int frame = 1; frame <= 8; ++frame) {
+		cr_assert(plait_scene_apply_frame(&scene, world, frame, &error), "%s", error.message);
+		cr_assert(test_step_frames(world, 1));
+		float height = 0.5f * (float)(frame < 5 ? frame : 5);
+		cr_assert_float_eq(plait_collider_signed_distance(floor, (plait_vec3){0, height + 1.0f, 0}), 1.0f,
+		                   1e-4f, "frame %d", frame);
+		plait_vec3 x[2];
+		plait_object_get_positions(dots, 0, 2, x, NULL);
+		if (frame <= 5) {
+			for (int k = 0; k < 2; ++k)
+				cr_assert_float_eq(x[k].y, height + 0.02f, 2e-3f, "frame %d: particle %d at y = %g", frame, k,
+				                   (double)x[k].y);
+		}
+	}
+	plait_destroy_world(world);
+	plait_scene_free(&scene);
+	remove_tree(dir);
+	free(dir);
+}
+
+/* A sequence is read by vertex order, not by position: a frame may bring vertices together or
+ * fold faces flat, which merging or dropping by position would get wrong. */
+Test(deforming_collider, scene_sequence_keeps_vertices_that_meet)
+{
+	char *dir = make_temp_dir();
+	write_floor(dir, "floor.obj", 0.0f);
+	/* Frame 1: the middle column of vertices moves onto the left one, folding two faces flat. */
+	write_text(dir, "floor.0001.obj",
+	           "v -1 0 -1\nv -1 0 -1\nv 1 0 -1\nv -1 0 0\nv -1 0 0\nv 1 0 0\nv -1 0 1\nv -1 0 1\nv 1 0 1\n"
+	           "f 1 4 5 2\nf 2 5 6 3\nf 4 7 8 5\nf 5 8 9 6\n");
+	plait_scene scene;
+	plait_tool_error error;
+	cr_assert(plait_scene_load_string(floor_scene, "scene.json", dir, &scene, &error), "%s", error.message);
+	const plait_vec3 *shape = plait_mesh_sequence_frame(&scene.objects[0].sequence, 1);
+	cr_assert_eq(scene.objects[0].vertex_count, 9);
+	/* The mesh's vertex v is the same vertex in the frame, wherever it went. */
+	for (int v = 0; v < 9; ++v) {
+		plait_vec3 rest = scene.objects[0].positions[v];
+		float expected_x = rest.x > 0.5f ? 1.0f : -1.0f;
+		cr_expect_float_eq(shape[v].x, expected_x, 1e-6f, "vertex %d", v);
+		cr_expect_float_eq(shape[v].z, rest.z, 1e-6f, "vertex %d", v);
+	}
+	plait_scene_free(&scene);
+	remove_tree(dir);
+	free(dir);
+}
+
+static void expect_scene_error(const char *dir, const char *json, const char *expected)
+{
+	plait_scene scene;
+	plait_tool_error error = {{0}};
+	bool ok = plait_scene_load_string(json, "scene.json", dir, &scene, &error);
+	if (ok)
+		plait_scene_free(&scene);
+	cr_assert(!ok, "loaded: %s", json);
+	cr_expect_str_eq(error.message, expected);
+}
+
+static char *scene_with_sequence(const char *shape_keys)
+{
+	char *json = malloc(1024);
+	snprintf(json, 1024,
+	         "{\"objects\": [{\"name\": \"floor\", \"type\": \"collider\", %s},"
+	         "{\"type\": \"particles\", \"positions\": [[0, 1, 0]]}]}",
+	         shape_keys);
+	return json;
+}
+
+Test(deforming_collider, scene_sequence_errors)
+{
+	char *dir = make_temp_dir();
+	write_floor(dir, "floor.obj", 0.0f);
+	write_floor_frames(dir, 1, 2);
+	write_floor_frames(dir, 4, 5);
+	char expected[1024];
+
+	/* A gap, and no file at all. */
+	char *json =
+	    scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"floor.%04d.obj\"");
+	snprintf(
+	    expected, sizeof expected,
+	    "scene.json: objects[0].sequence: %s/floor.0003.obj: missing: expected a file for every frame from 1 "
+	    "to the sequence's last (5)",
+	    dir);
+	expect_scene_error(dir, json, expected);
+	free(json);
+	json = scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"none_%d.obj\"");
+	snprintf(
+	    expected, sizeof expected,
+	    "scene.json: objects[0].sequence: %s/none_1.obj: missing: expected a file for every frame from 1 to "
+	    "the sequence's last, found none",
+	    dir);
+	expect_scene_error(dir, json, expected);
+	free(json);
+	json = scene_with_sequence(
+	    "\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"no_such_folder/floor.%04d.obj\"");
+	snprintf(
+	    expected, sizeof expected,
+	    "scene.json: objects[0].sequence: %s/no_such_folder/floor.0001.obj: cannot open its folder: No such "
+	    "file or directory",
+	    dir);
+	expect_scene_error(dir, json, expected);
+	free(json);
+
+	/* Other topology: more vertices and faces, or the same counts joined otherwise. */
+	write_floor(dir, "floor.0003.obj", 1.5f);
+	write_text(
+	    dir, "floor.0004.obj",
+	    "v -1 0 -1\nv 0 0 -1\nv 1 0 -1\nv -1 0 0\nv 0 0 0\nv 1 0 0\nv -1 0 1\nv 0 0 1\nv 1 0 1\nv 2 0 1\n"
+	    "f 1 4 5 2\nf 2 5 6 3\nf 4 7 8 5\nf 5 8 9 6\nf 6 9 10\n");
+	json =
+	    scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"floor.%04d.obj\"");
+	snprintf(expected, sizeof expected,
+	         "scene.json: objects[0].sequence: %s/floor.0004.obj: expected the 9 vertices and 4 faces of "
+	         "%s/floor.obj, got 10 vertices and 5 faces",
+	         dir, dir);
+	expect_scene_error(dir, json, expected);
+	write_text(dir, "floor.0004.obj",
+	           "v -1 0 -1\nv 0 0 -1\nv 1 0 -1\nv -1 0 0\nv 0 0 0\nv 1 0 0\nv -1 0 1\nv 0 0 1\nv 1 0 1\n"
+	           "f 1 4 5 2\nf 2 5 6 3\nf 4 7 8 5\nf 5 6 9 8\n");
+	snprintf(
+	    expected, sizeof expected,
+	    "scene.json: objects[0].sequence: %s/floor.0004.obj: expected the faces of %s/floor.obj over the "
+	    "same vertices, got 9 vertices and 4 faces joined differently",
+	    dir, dir);
+	expect_scene_error(dir, json, expected);
+
+	/* An unreadable file, and a non-finite coordinate: the mesh reader's own messages. */
+	write_text(dir, "floor.0004.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 99\n");
+	plait_tool_error error = {{0}};
+	plait_scene scene;
+	cr_assert(!plait_scene_load_string(json, "scene.json", dir, &scene, &error));
+	snprintf(expected, sizeof expected,
+	         "scene.json: objects[0].sequence: %s/floor.0004.obj: cannot read mesh: ", dir);
+	cr_expect(strncmp(error.message, expected, strlen(expected)) == 0, "%s", error.message);
+	write_text(dir, "floor.0004.obj",
+	           "v -1 0 -1\nv 0 0 -1\nv 1 0 -1\nv -1 0 0\nv 0 nan 0\nv 1 0 0\nv -1 0 1\nv 0 0 1\nv 1 0 1\n"
+	           "f 1 4 5 2\nf 2 5 6 3\nf 4 7 8 5\nf 5 8 9 6\n");
+	cr_assert(!plait_scene_load_string(json, "scene.json", dir, &scene, &error));
+	snprintf(expected, sizeof expected, "scene.json: objects[0].sequence: %s/floor.0004.obj: mesh 0 ", dir);
+	cr_expect(strncmp(error.message, expected, strlen(expected)) == 0, "%s", error.message);
+	cr_expect(strstr(error.message, "has a non-finite coordinate") != NULL, "%s", error.message);
+	free(json);
+
+	/* The key itself. */
+	json = scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"floor.obj\"");
+	expect_scene_error(
+	    dir, json,
+	    "scene.json: objects[0].sequence: expected a file path pattern with one frame number, %d or "
+	    "%0Nd as in \"arm.%04d.obj\", got \"floor.obj\" (no frame number)");
+	free(json);
+	json = scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"f%d.%d.obj\"");
+	expect_scene_error(
+	    dir, json,
+	    "scene.json: objects[0].sequence: expected a file path pattern with one frame number, %d or "
+	    "%0Nd as in \"arm.%04d.obj\", got \"f%d.%d.obj\" (more than one frame number)");
+	free(json);
+	json =
+	    scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"floor.%s.obj\"");
+	expect_scene_error(
+	    dir, json,
+	    "scene.json: objects[0].sequence: expected a file path pattern with one frame number, %d or "
+	    "%0Nd as in \"arm.%04d.obj\", got \"floor.%s.obj\" (%s is not %d or %0Nd)");
+	free(json);
+	json = scene_with_sequence(
+	    "\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": \"f%02d/floor.obj\"");
+	expect_scene_error(
+	    dir, json,
+	    "scene.json: objects[0].sequence: expected a file path pattern with one frame number, %d or "
+	    "%0Nd as in \"arm.%04d.obj\", got \"f%02d/floor.obj\" (the frame number is in a folder "
+	    "name, not in the file name)");
+	free(json);
+	json = scene_with_sequence("\"shape\": \"mesh\", \"mesh\": \"floor.obj\", \"sequence\": 4");
+	expect_scene_error(
+	    dir, json,
+	    "scene.json: objects[0].sequence: expected a file path pattern with one frame number, as in "
+	    "\"arm.%04d.obj\" (relative to the scene file's folder), got 4");
+	free(json);
+	json = scene_with_sequence("\"shape\": \"sphere\", \"sequence\": \"floor.%04d.obj\"");
+	expect_scene_error(
+	    dir, json,
+	    "scene.json: objects[0].sequence: not used by a sphere collider (a sphere takes center, "
+	    "radius)");
+	free(json);
+	remove_tree(dir);
+	free(dir);
+}
+
+/* `plait run` stops with status 1 before writing anything when a sequence file is bad. */
+Test(deforming_collider, run_refuses_a_bad_sequence_before_writing)
+{
+	char *dir = make_temp_dir();
+	write_floor(dir, "floor.obj", 0.0f);
+	write_floor_frames(dir, 1, 3);
+	write_text(dir, "floor.0002.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n");
+	write_text(dir, "scene.json", floor_scene);
+	char scene_path[1024], out_dir[1024];
+	snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+	snprintf(out_dir, sizeof out_dir, "%s/out", dir);
+	const char *argv[] = {"plait", "run", scene_path, "--out", out_dir};
+	cli_result result = run_cli(5, argv);
+	cr_expect_eq(result.code, 1);
+	char expected[4096];
+	snprintf(expected, sizeof expected,
+	         "%s: objects[0].sequence: %s/floor.0002.obj: expected the 9 vertices and 4 faces of "
+	         "%s/floor.obj, got "
+	         "3 vertices and 1 face\n",
+	         scene_path, dir, dir);
+	cr_expect_str_eq(result.err, expected);
+	struct stat info;
+	cr_expect_neq(stat(out_dir, &info), 0, "the output folder was created");
+	free_result(&result);
+
+	/* Fixed, the same scene runs and says so. */
+	write_floor(dir, "floor.0002.obj", 1.0f);
+	result = run_cli(5, argv);
+	cr_expect_eq(result.code, 0, "%s", result.err);
+	free_result(&result);
+	remove_tree(dir);
+	free(dir);
 }
