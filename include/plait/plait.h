@@ -299,7 +299,8 @@ typedef enum plait_shape_type {
 	PLAIT_SHAPE_SPHERE,
 	PLAIT_SHAPE_CAPSULE,
 	PLAIT_SHAPE_BOX,
-	PLAIT_SHAPE_MESH, /* a triangle mesh (polygons are fanned), rigid, moved by its transform */
+	PLAIT_SHAPE_MESH, /* a triangle mesh (polygons are fanned), moved by its transform; rigid
+	                   * unless created deforming */
 } plait_shape_type;
 
 /* A rigid transform as users write it: translate, then rotation in degrees about x, then y,
@@ -320,6 +321,8 @@ typedef struct plait_collider_def {
 	plait_vec3 size;           /* box: full extents */
 	plait_vec3 rotation_deg;   /* box: orientation */
 	plait_mesh_def mesh;       /* mesh: vertices and faces in the collider's own space */
+	bool deforming;            /* mesh: its vertices move too, set frame by frame with
+	                            * plait_collider_set_mesh_positions (false) */
 	plait_transform transform; /* initial keyframe transform (identity) */
 	plait_surface_def surface;
 } plait_collider_def;
@@ -377,7 +380,17 @@ plait_result plait_object_set_pin_target(plait_object_id object, int vertex, pla
 plait_result plait_collider_set_transform(plait_object_id collider, plait_transform transform,
                                           plait_error *error);
 plait_transform plait_collider_get_transform(plait_object_id collider);
-/* Signed distance (scene units) from point to the collider's surface, thickness not included. */
+/* Deforming mesh colliders (created with deforming = true): the positions of all count vertices
+ * (count must be the mesh's vertex count), in the collider's own space, reached at the end of the
+ * next frame. In between each vertex moves on a straight line from where it was at the end of
+ * the last frame, and collisions follow the moving triangles (their swept volume in time, seed
+ * 000 §2.3); the transform applies on top. Without a new call the mesh keeps its last shape.
+ * The faces never change. Fails, changing nothing, for a rigid collider, a wrong count or a
+ * non-finite position. */
+plait_result plait_collider_set_mesh_positions(plait_object_id collider, const plait_vec3 *positions,
+                                               int count, plait_error *error);
+/* Signed distance (scene units) from point to the collider's surface, thickness not included; a
+ * deforming mesh as it stands at the end of the last frame. */
 float plait_collider_signed_distance(plait_object_id collider, plait_vec3 point);
 
 /* ---- Statistics of the last frame ---------------------------------------------------------- */

@@ -14,6 +14,7 @@ void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *al
 	plait_free(allocator, shape->normals);
 	plait_free(allocator, shape->nodes);
 	plait_free(allocator, shape->triangle_order);
+	plait_free(allocator, shape->start_positions);
 	memset(shape, 0, sizeof *shape);
 }
 
@@ -28,6 +29,11 @@ static void triangle_bounds(const plait_mesh_shape *shape, int t, vec3 *lower, v
 	const int *tri = shape->triangles[t];
 	*lower = v3_min(shape->positions[tri[0]], v3_min(shape->positions[tri[1]], shape->positions[tri[2]]));
 	*upper = v3_max(shape->positions[tri[0]], v3_max(shape->positions[tri[1]], shape->positions[tri[2]]));
+	if (shape->start_positions != NULL) {
+		const vec3 *start = shape->start_positions;
+		*lower = v3_min(*lower, v3_min(start[tri[0]], v3_min(start[tri[1]], start[tri[2]])));
+		*upper = v3_max(*upper, v3_max(start[tri[0]], v3_max(start[tri[1]], start[tri[2]])));
+	}
 }
 
 static float axis_value(vec3 v, int axis)
@@ -162,6 +168,60 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
 	plait_free(allocator, centroid);
 	plait_free(allocator, scratch);
 	return PLAIT_OK;
+}
+
+plait_result plait_mesh_shape_make_deforming(plait_mesh_shape *shape, const plait_allocator *allocator,
+                                             plait_error *error)
+{
+	shape->start_positions = plait_alloc(allocator, sizeof(vec3) * (size_t)shape->vertex_count);
+	if (shape->start_positions == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building a mesh collider");
+	}
+	memcpy(shape->start_positions, shape->positions, sizeof(vec3) * (size_t)shape->vertex_count);
+	return PLAIT_OK;
+}
+
+/* Exact at both ends (t = 0 gives a, t = 1 gives b), so a frame ends exactly on its target. */
+static vec3 lerp_exact(vec3 a, vec3 b, float t)
+{
+	float s = 1.0f - t;
+	return v3(s * a.x + t * b.x, s * a.y + t * b.y, s * a.z + t * b.z);
+}
+
+void plait_mesh_shape_deform(plait_mesh_shape *shape, const vec3 *from, const vec3 *to, float t0, float t1)
+{
+	float largest_sq = 0.0f;
+	for (int v = 0; v < shape->vertex_count; ++v) {
+		vec3 start = lerp_exact(from[v], to[v], t0), end = lerp_exact(from[v], to[v], t1);
+		shape->start_positions[v] = start;
+		shape->positions[v] = end;
+		largest_sq = plait_maxf(largest_sq, v3_length_sq(v3_sub(end, start)));
+	}
+	shape->largest_move = sqrtf(largest_sq);
+	for (int t = 0; t < shape->triangle_count; ++t) {
+		const int *tri = shape->triangles[t];
+		vec3 a = shape->positions[tri[0]], b = shape->positions[tri[1]], c = shape->positions[tri[2]];
+		shape->normals[t] = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+	}
+	/* Children always come after their parent (build_node), so one backward pass refits. */
+	for (int n = shape->node_count - 1; n >= 0; --n) {
+		plait_bvh_node *node = &shape->nodes[n];
+		if (node->count > 0) {
+			vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
+			for (int k = node->first; k < node->first + node->count; ++k) {
+				vec3 tl, tu;
+				triangle_bounds(shape, shape->triangle_order[k], &tl, &tu);
+				lower = v3_min(lower, tl);
+				upper = v3_max(upper, tu);
+			}
+			node->lower = lower;
+			node->upper = upper;
+		} else {
+			const plait_bvh_node *left = &shape->nodes[node->first], *right = &shape->nodes[node->first + 1];
+			node->lower = v3_min(left->lower, right->lower);
+			node->upper = v3_max(left->upper, right->upper);
+		}
+	}
 }
 
 static bool boxes_overlap(vec3 al, vec3 au, vec3 bl, vec3 bu)

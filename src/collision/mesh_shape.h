@@ -1,7 +1,9 @@
 /* Triangle-mesh colliders (nRigid from a mesh): the triangles in the collider's shape space and
- * a bounding volume hierarchy (axis-aligned boxes) over them. A collider is rigid and moves by
- * its keyframed transform, so the hierarchy is built once and never refitted: particles are
- * brought into shape space instead. */
+ * a bounding volume hierarchy (axis-aligned boxes) over them. A rigid collider moves by its
+ * keyframed transform only, so its hierarchy is built once and never refitted: particles are
+ * brought into shape space instead. A deforming one also moves its vertices: every substep they
+ * go on straight lines from start to end positions, and the boxes are refitted to cover each
+ * triangle's sweep (the topology, and so the tree, never changes). */
 #ifndef PLAIT_COLLISION_MESH_SHAPE_H
 #define PLAIT_COLLISION_MESH_SHAPE_H
 
@@ -23,6 +25,10 @@ typedef struct plait_mesh_shape {
 	int node_count;
 	plait_bvh_node *nodes;
 	int *triangle_order;
+	/* Deforming meshes only (NULL when rigid): vertex positions at the start of the current
+	 * substep, positions holding those at its end. Normals are those at the end. */
+	vec3 *start_positions;
+	float largest_move; /* the longest vertex move over the substep (0 when rigid) */
 } plait_mesh_shape;
 
 /* Copies positions and fans the faces into triangles; builds the hierarchy. */
@@ -30,8 +36,17 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
                                     const plait_mesh_def *mesh, plait_error *error);
 void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *allocator);
 
+/* Makes a built shape deforming (its vertices start at rest, where they were built). */
+plait_result plait_mesh_shape_make_deforming(plait_mesh_shape *shape, const plait_allocator *allocator,
+                                             plait_error *error);
+
+/* Places the vertices of a deforming shape for the substep [t0, t1] of a frame in which vertex
+ * v goes from from[v] to to[v] linearly; updates the normals and refits the boxes. */
+void plait_mesh_shape_deform(plait_mesh_shape *shape, const vec3 *from, const vec3 *to, float t0, float t1);
+
 /* Calls visit(triangle, context) for every triangle whose node box (and, with
- * test_triangles, whose own rest box) overlaps [lower, upper], however many there are. */
+ * test_triangles, whose own box: over its sweep when deforming) overlaps [lower, upper],
+ * however many there are. */
 typedef void plait_triangle_visitor(int triangle, void *context);
 void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
                             plait_triangle_visitor *visit, void *context);

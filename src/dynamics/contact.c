@@ -4,6 +4,7 @@
 
 #include "collision/ccd.h"
 #include "collision/mesh_shape.h"
+#include "collision/moving_triangle.h"
 #include "collision/particle_hash.h"
 #include "dynamics/mesh_contact.h"
 
@@ -22,6 +23,9 @@ void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
 		plait_collider *c = &sim->colliders[k];
 		c->rigid_start = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t0));
 		c->rigid_end = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t1));
+		if (c->mesh_end != NULL) {
+			plait_mesh_shape_deform(c->shape.mesh, c->mesh_start, c->mesh_end, t0, t1);
+		}
 	}
 }
 
@@ -136,25 +140,62 @@ static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3
 /* What a particle's pass over a mesh collider gathers, triangle by triangle. */
 typedef struct mesh_pass {
 	const plait_mesh_shape *mesh;
+	const vec3 *start; /* vertices at the substep's start: the mesh's own positions when rigid */
+	bool deforming;
 	vec3 p0, p1;
 	float radius;
 	float first_toi;
 	int first_triangle;
 	float total_depth, deepest;
 	vec3 deepest_normal;
+	vec3 deepest_motion; /* how far the touched point of the surface moved over the substep */
 	bool moved;
 } mesh_pass;
 
-/* The earliest time the path comes within the radius of a triangle (continuous test). */
+static vec3 barycentric(const vec3 *positions, const int *tri, const float w[3])
+{
+	return v3_add(v3_add(v3_scale(positions[tri[0]], w[0]), v3_scale(positions[tri[1]], w[1])),
+	              v3_scale(positions[tri[2]], w[2]));
+}
+
+static vec3 triangle_normal(vec3 a, vec3 b, vec3 c)
+{
+	return v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+}
+
+/* Deforming meshes: whether a triangle needs the continuous test (see collision/moving_triangle.h).
+ * A particle touching it at the start has its contact at t = 0. */
+static bool sweep_needed(mesh_pass *pass, int t)
+{
+	const int *tri = pass->mesh->triangles[t];
+	const vec3 *end = pass->mesh->positions;
+	vec3 start_corners[3] = {pass->start[tri[0]], pass->start[tri[1]], pass->start[tri[2]]};
+	vec3 end_corners[3] = {end[tri[0]], end[tri[1]], end[tri[2]]};
+	if (pass->first_toi <= 0.0f ||
+	    !plait_moving_triangle_may_touch(pass->p0, pass->p1, start_corners, end_corners, pass->radius)) {
+		return false;
+	}
+	if (plait_moving_triangle_touching_at_start(pass->p0, start_corners, pass->radius)) {
+		pass->first_toi = 0.0f;
+		pass->first_triangle = t;
+		return false;
+	}
+	return true;
+}
+
+/* The earliest time the path comes within the radius of a triangle (continuous test; the
+ * triangle's corners move too when the mesh deforms). */
 static void visit_sweep(int t, void *context)
 {
 	mesh_pass *pass = context;
 	const int *tri = pass->mesh->triangles[t];
+	if (pass->deforming && !sweep_needed(pass, t)) {
+		return;
+	}
 	plait_ccd_motion_float m;
-	vec3 points[4] = {pass->p0, pass->mesh->positions[tri[0]], pass->mesh->positions[tri[1]],
-	                  pass->mesh->positions[tri[2]]};
+	vec3 points[4] = {pass->p0, pass->start[tri[0]], pass->start[tri[1]], pass->start[tri[2]]};
 	for (int q = 0; q < 4; ++q) {
-		vec3 end = q == 0 ? pass->p1 : points[q];
+		vec3 end = q == 0 ? pass->p1 : pass->mesh->positions[tri[q - 1]];
 		m.start[q][0] = points[q].x;
 		m.start[q][1] = points[q].y;
 		m.start[q][2] = points[q].z;
@@ -170,15 +211,33 @@ static void visit_sweep(int t, void *context)
 	}
 }
 
-static void push_out(mesh_pass *pass, vec3 n, float depth)
+static void push_out(mesh_pass *pass, vec3 n, float depth, vec3 surface_motion)
 {
 	pass->p1 = v3_mul_add(pass->p1, depth, n);
 	pass->total_depth += depth;
 	if (depth > pass->deepest) {
 		pass->deepest = depth;
 		pass->deepest_normal = n;
+		pass->deepest_motion = surface_motion;
 	}
 	pass->moved = true;
+}
+
+/* Which side of a triangle the path came from: that of p0 against the same surface point at the
+ * substep's start (q, face: the point and normal of a rigid mesh, which stands still). Sets
+ * *motion to how far that point moved over the substep. */
+static vec3 side_normal(const mesh_pass *pass, int t, vec3 q, vec3 face, const float w[3], vec3 *motion)
+{
+	*motion = v3(0.0f, 0.0f, 0.0f);
+	if (pass->deforming) {
+		const int *tri = pass->mesh->triangles[t];
+		vec3 q_start = barycentric(pass->start, tri, w);
+		vec3 face_start = triangle_normal(pass->start[tri[0]], pass->start[tri[1]], pass->start[tri[2]]);
+		*motion = v3_sub(q, q_start);
+		q = q_start;
+		face = v3_length_sq(face_start) > 0.0f ? face_start : face;
+	}
+	return v3_dot(v3_sub(pass->p0, q), face) >= 0.0f ? face : v3_neg(face);
 }
 
 /* Push the end out of a triangle within the radius, on the side the path came from when the
@@ -189,13 +248,14 @@ static void visit_proximity(int t, void *context)
 	const plait_mesh_shape *mesh = pass->mesh;
 	const int *tri = mesh->triangles[t];
 	int region;
+	float w[3];
 	vec3 q = plait_closest_point_on_triangle(pass->p1, mesh->positions[tri[0]], mesh->positions[tri[1]],
-	                                         mesh->positions[tri[2]], &region, NULL);
+	                                         mesh->positions[tri[2]], &region, w);
 	vec3 face = mesh->normals[t];
-	vec3 n;
+	vec3 n, motion;
 	float distance;
 	if (region == 0 && v3_length_sq(face) > 0.0f) {
-		n = v3_dot(v3_sub(pass->p0, q), face) >= 0.0f ? face : v3_neg(face);
+		n = side_normal(pass, t, q, face, w, &motion);
 		distance = v3_dot(v3_sub(pass->p1, q), n);
 	} else {
 		vec3 d = v3_sub(pass->p1, q);
@@ -203,44 +263,64 @@ static void visit_proximity(int t, void *context)
 		if (distance >= pass->radius) {
 			return;
 		}
-		n = distance > 1e-6f * pass->radius
-		        ? v3_scale(d, 1.0f / distance)
-		        : (v3_dot(v3_sub(pass->p0, q), face) >= 0.0f ? face : v3_neg(face));
+		vec3 side = side_normal(pass, t, q, face, w, &motion);
+		n = distance > 1e-6f * pass->radius ? v3_scale(d, 1.0f / distance) : side;
 	}
 	if (pass->radius - distance > 0.0f) {
-		push_out(pass, n, pass->radius - distance);
+		push_out(pass, n, pass->radius - distance, motion);
 	}
 }
 
-/* One particle against a mesh collider, in the collider's space (where the mesh stands
- * still). A path shorter than the contact radius cannot pass through a triangle without ending
- * within the radius of it, so a proximity test at the end suffices; a longer one is swept with
- * the continuous vertex-triangle test (collision/ccd.h), which never misses a contact. Every
- * candidate triangle is visited, however many the path overlaps. Returns true when the particle
- * was moved; *p1 is updated in shape space. */
+/* One particle against a mesh collider, in the collider's space (where a rigid mesh stands
+ * still and a deforming one moves each vertex on a straight line over the substep). A path
+ * shorter than the contact radius, less the longest vertex move, cannot pass through a triangle
+ * without ending within the radius of it, so a proximity test at the end suffices; a longer one
+ * is swept with the continuous vertex-triangle test (collision/ccd.h), which never misses a
+ * contact. Every candidate triangle is visited, however many the path overlaps. Returns true
+ * when the particle was moved; *p1 is updated in shape space and *surface_motion receives how
+ * far the touched surface point moved over the substep (zero for a rigid mesh). */
 static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 *p1, float radius,
-                                    float friction, vec3 *contact_normal)
+                                    float friction, vec3 *contact_normal, vec3 *surface_motion)
 {
 	vec3 grow = {radius, radius, radius};
 	vec3 lower = v3_sub(v3_min(p0, *p1), grow), upper = v3_add(v3_max(p0, *p1), grow);
-	mesh_pass pass = {mesh, p0, *p1, radius, 2.0f, -1, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}, false};
-	if (v3_length(v3_sub(*p1, p0)) >= radius) {
+	bool deforming = mesh->start_positions != NULL;
+	mesh_pass pass = {.mesh = mesh,
+	                  .start = deforming ? mesh->start_positions : mesh->positions,
+	                  .deforming = deforming,
+	                  .p0 = p0,
+	                  .p1 = *p1,
+	                  .radius = radius,
+	                  .first_toi = 2.0f,
+	                  .first_triangle = -1};
+	if (v3_length(v3_sub(*p1, p0)) + mesh->largest_move >= radius) {
 		/* Fast: the earliest contact along the path, then keep the end on the contact's side. */
 		plait_mesh_shape_visit(mesh, lower, upper, true, visit_sweep, &pass);
 		if (pass.first_triangle >= 0) {
-			const int *tri = mesh->triangles[pass.first_triangle];
-			vec3 at = v3_lerp(p0, *p1, pass.first_toi);
+			int t = pass.first_triangle;
+			const int *tri = mesh->triangles[t];
+			float toi = pass.first_toi;
+			vec3 at = v3_lerp(p0, *p1, toi);
+			/* The triangle where it was at the time of contact (for a rigid mesh, where it is). */
+			vec3 a = mesh->positions[tri[0]], b = mesh->positions[tri[1]], c = mesh->positions[tri[2]];
+			if (deforming) {
+				a = v3_lerp(pass.start[tri[0]], a, toi);
+				b = v3_lerp(pass.start[tri[1]], b, toi);
+				c = v3_lerp(pass.start[tri[2]], c, toi);
+			}
 			int region;
-			vec3 q = plait_closest_point_on_triangle(at, mesh->positions[tri[0]], mesh->positions[tri[1]],
-			                                         mesh->positions[tri[2]], &region, NULL);
+			float w[3];
+			vec3 q = plait_closest_point_on_triangle(at, a, b, c, &region, w);
 			vec3 n = v3_sub(at, q);
 			float length = v3_length(n);
-			vec3 face = mesh->normals[pass.first_triangle];
-			n = length > 1e-6f * radius ? v3_scale(n, 1.0f / length)
-			                            : (v3_dot(v3_sub(p0, q), face) >= 0.0f ? face : v3_neg(face));
-			float depth = radius - v3_dot(v3_sub(pass.p1, q), n);
+			/* The touched point moves on with the surface to the end of the substep. */
+			vec3 q_end = deforming ? barycentric(mesh->positions, tri, w) : q;
+			vec3 motion;
+			vec3 side = side_normal(&pass, t, q_end, mesh->normals[t], w, &motion);
+			n = length > 1e-6f * radius ? v3_scale(n, 1.0f / length) : side;
+			float depth = radius - v3_dot(v3_sub(pass.p1, q_end), n);
 			if (depth > 0.0f) {
-				push_out(&pass, n, depth);
+				push_out(&pass, n, depth, motion);
 			}
 		}
 	}
@@ -248,10 +328,12 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 	if (!pass.moved) {
 		return false;
 	}
-	/* Friction once, against the deepest contact, on the whole normal push. */
-	*p1 = v3_add(pass.p1,
-	             friction_correction(v3_sub(pass.p1, p0), pass.deepest_normal, friction * pass.total_depth));
+	/* Friction once, against the deepest contact, on the whole normal push, and on the motion
+	 * relative to the touched surface: a moving surface carries what rests on it. */
+	vec3 relative = v3_sub(v3_sub(pass.p1, p0), pass.deepest_motion);
+	*p1 = v3_add(pass.p1, friction_correction(relative, pass.deepest_normal, friction * pass.total_depth));
 	*contact_normal = pass.deepest_normal;
+	*surface_motion = pass.deepest_motion;
 	return true;
 }
 
@@ -298,11 +380,12 @@ static void collide_collider_range(void *context, int begin, int end)
 		vec3 p1 = plait_rigid_apply_inverse(r1, p->point[i].x);
 		float radius = (p->radius[i] + c->thickness) * inverse_scale;
 		if (c->shape.type == PLAIT_SHAPE_MESH) {
-			vec3 normal;
+			vec3 normal, motion;
 			float friction = combined_friction(mat->friction, c->friction);
-			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, &normal)) {
-				vec3 surface_velocity =
-				    v3_scale(v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, p1)), inverse_h);
+			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, &normal, &motion)) {
+				/* Where the touched surface point was at the substep's start, to where it is. */
+				vec3 surface_velocity = v3_scale(
+				    v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, v3_sub(p1, motion))), inverse_h);
 				p->point[i].x = plait_rigid_apply(r1, p1);
 				record_collider_contact(p, i, plait_rigid_rotate(r1, normal), surface_velocity,
 				                        0.5f * (mat->bounce + c->bounce),

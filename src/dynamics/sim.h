@@ -171,6 +171,9 @@ typedef struct plait_collider {
 	plait_shape shape;
 	plait_transform transform_start, transform_end; /* keyframes at frame start and end */
 	plait_rigid rigid_start, rigid_end;             /* interpolated, current substep */
+	/* Deforming mesh colliders (NULL for every other): vertex positions in shape space at the
+	 * frame's start and end; the mesh shape follows them substep by substep. */
+	vec3 *mesh_start, *mesh_end;
 	float thickness, friction, stickiness, bounce;
 	bool collide;
 } plait_collider;

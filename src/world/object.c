@@ -752,6 +752,11 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 	    check_transform(error, label, def->transform) != PLAIT_OK) {
 		return id;
 	}
+	if (def->deforming && def->shape != PLAIT_SHAPE_MESH) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: only a mesh collider can be deforming",
+		                label);
+		return id;
+	}
 	plait_sim *sim = &world->sim;
 	if (def->shape == PLAIT_SHAPE_MESH) {
 		shape.mesh = plait_alloc_zero(&world->allocator, 1, sizeof *shape.mesh);
@@ -768,8 +773,15 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 			return id;
 		}
 	}
+	/* A deforming mesh starts at rest: the frame's start and end are its own vertices. */
+	size_t mesh_bytes = def->deforming ? sizeof(vec3) * (size_t)shape.mesh->vertex_count : 0;
+	vec3 *mesh_start = def->deforming ? plait_alloc(&world->allocator, mesh_bytes) : NULL;
+	vec3 *mesh_end = def->deforming ? plait_alloc(&world->allocator, mesh_bytes) : NULL;
 	plait_object *object = plait_world_new_object(world, PLAIT_OBJECT_COLLIDER, def->name, &id);
-	bool ok = object != NULL && plait_sim_reserve_colliders(sim, 1) && plait_sim_reserve_materials(sim, 1);
+	bool ok = object != NULL && plait_sim_reserve_colliders(sim, 1) && plait_sim_reserve_materials(sim, 1) &&
+	          (!def->deforming ||
+	           (mesh_start != NULL && mesh_end != NULL &&
+	            plait_mesh_shape_make_deforming(shape.mesh, &world->allocator, NULL) == PLAIT_OK));
 	if (!ok) {
 		if (object != NULL) {
 			abandon_object(world, object);
@@ -778,8 +790,14 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 			plait_mesh_shape_destroy(shape.mesh, &world->allocator);
 			plait_free(&world->allocator, shape.mesh);
 		}
+		plait_free(&world->allocator, mesh_start);
+		plait_free(&world->allocator, mesh_end);
 		plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "%s: out of memory", label);
 		return (plait_object_id){0};
+	}
+	if (def->deforming) {
+		memcpy(mesh_start, shape.mesh->positions, mesh_bytes);
+		memcpy(mesh_end, shape.mesh->positions, mesh_bytes);
 	}
 	object->material = add_material(sim, id.index1 - 1, PLAIT_OBJECT_COLLIDER, &def->surface, 0.0f);
 	int k = sim->collider_count++;
@@ -789,6 +807,8 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 	collider->shape = shape;
 	collider->transform_start = def->transform;
 	collider->transform_end = def->transform;
+	collider->mesh_start = mesh_start;
+	collider->mesh_end = mesh_end;
 	collider->thickness = def->surface.thickness;
 	collider->friction = def->surface.friction;
 	collider->stickiness = def->surface.stickiness;

@@ -13,6 +13,10 @@ void plait_collider_release(plait_world *world, plait_collider *collider)
 		plait_free(&world->allocator, collider->shape.mesh);
 		collider->shape.mesh = NULL;
 	}
+	plait_free(&world->allocator, collider->mesh_start);
+	plait_free(&world->allocator, collider->mesh_end);
+	collider->mesh_start = NULL;
+	collider->mesh_end = NULL;
 }
 
 void plait_destroy_object(plait_object_id id)
@@ -356,6 +360,37 @@ plait_result plait_collider_set_transform(plait_object_id id, plait_transform tr
 		                       "collider transform needs finite translate and rotate and scale > 0");
 	}
 	collider->transform_end = transform;
+	return PLAIT_OK;
+}
+
+plait_result plait_collider_set_mesh_positions(plait_object_id id, const plait_vec3 *positions, int count,
+                                               plait_error *error)
+{
+	plait_collider *collider = resolve_collider(id, error);
+	if (collider == NULL) {
+		return error != NULL ? error->code : PLAIT_ERROR_INVALID_ARGUMENT;
+	}
+	const char *name = id.world->objects[id.index1 - 1].name;
+	if (collider->mesh_end == NULL) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "'%s' is a rigid collider; only a mesh collider created with deforming = true "
+		                       "takes mesh positions",
+		                       name);
+	}
+	int vertex_count = collider->shape.mesh->vertex_count;
+	if (positions == NULL || count != vertex_count) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "'%s': expected %d mesh positions (one per vertex), got %d%s", name,
+		                       vertex_count, count, positions == NULL ? " and no array" : "");
+	}
+	for (int v = 0; v < count; ++v) {
+		if (!v3_is_finite(positions[v])) {
+			return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+			                       "'%s': mesh position %d is not finite (%g, %g, %g)", name, v,
+			                       (double)positions[v].x, (double)positions[v].y, (double)positions[v].z);
+		}
+	}
+	memcpy(collider->mesh_end, positions, sizeof(vec3) * (size_t)count);
 	return PLAIT_OK;
 }
 

@@ -228,6 +228,23 @@ plait_world_def plait_world_get_def(plait_world_id id)
 	return world != NULL ? world->def : plait_default_world_def();
 }
 
+/* After a frame a deforming mesh starts the next one where it ended; after a failed frame,
+ * which leaves everything at its start, it goes back to where the frame began. */
+static void finish_deforming_colliders(plait_sim *sim, bool advanced)
+{
+	for (int k = 0; k < sim->collider_count; ++k) {
+		plait_collider *c = &sim->colliders[k];
+		if (c->mesh_end == NULL) {
+			continue;
+		}
+		if (advanced) {
+			memcpy(c->mesh_start, c->mesh_end, sizeof(vec3) * (size_t)c->shape.mesh->vertex_count);
+		} else {
+			plait_mesh_shape_deform(c->shape.mesh, c->mesh_start, c->mesh_end, 0.0f, 0.0f);
+		}
+	}
+}
+
 plait_result plait_world_step(plait_world_id id, plait_error *error)
 {
 	plait_world *world = resolve_world(id);
@@ -235,6 +252,7 @@ plait_result plait_world_step(plait_world_id id, plait_error *error)
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ID, "null world id");
 	}
 	plait_result result = plait_sim_step(&world->sim, error);
+	finish_deforming_colliders(&world->sim, result == PLAIT_OK);
 	/* Counters of the frame; the measures of the state are taken when someone asks. */
 	world->stats.contacts = world->sim.contacts;
 	world->stats.ccd_hits = world->sim.ccd_hits;

@@ -107,7 +107,11 @@ static void plait_explain_text(const plait_scene *scene, plait_world_id world, F
 	for (int i = 0; i < scene->object_count; ++i) {
 		const plait_scene_object *o = &scene->objects[i];
 		fprintf(out, "  %-16s %-9s ", o->name, types[o->type]);
-		if (o->type == PLAIT_OBJECT_COLLIDER)
+		if (o->type == PLAIT_OBJECT_COLLIDER && o->sequence.frame_count > 0)
+			fprintf(out, "%s%s, deforming over %d frame%s\n", shapes[o->collider.shape],
+			        o->keyframe_count > 0 ? ", keyframed" : "", o->sequence.frame_count,
+			        o->sequence.frame_count == 1 ? "" : "s");
+		else if (o->type == PLAIT_OBJECT_COLLIDER)
 			fprintf(out, "%s%s\n", shapes[o->collider.shape], o->keyframe_count > 0 ? ", keyframed" : "");
 		else if (o->type == PLAIT_OBJECT_CLOTH)
 			fprintf(out, "%d vertices, %d faces, %d pins\n", o->vertex_count, o->face_count, o->pin_count);

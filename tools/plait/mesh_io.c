@@ -158,8 +158,9 @@ static int plait_compare_vertex(const void *pa, const void *pb)
 	return (a->index > b->index) - (a->index < b->index);
 }
 
-// Merges vertices with identical positions (assimp only joins within one mesh).
-static bool plait_weld(plait_soup *soup, int *unique_count)
+// Merges vertices with identical positions (assimp only joins within one mesh). vertex_of (NULL
+// or one per vertex) receives the vertex each one was merged into.
+static bool plait_weld(plait_soup *soup, int *unique_count, int *vertex_of)
 {
 	int n = soup->vertex_count;
 	plait_sort_vertex *sorted = malloc(sizeof *sorted * (size_t)(n > 0 ? n : 1));
@@ -185,6 +186,8 @@ static bool plait_weld(plait_soup *soup, int *unique_count)
 	}
 	for (int k = 0; k < soup->index_count; ++k)
 		soup->face_indices[k] = remap[soup->face_indices[k]];
+	if (vertex_of != NULL)
+		memcpy(vertex_of, remap, sizeof(int) * (size_t)n);
 	free(sorted);
 	free(remap);
 	return true;
@@ -212,7 +215,9 @@ static bool plait_face_is_degenerate(const plait_soup *soup, const int *indices,
 }
 
 // Drops degenerate faces, then vertices no face uses (merged duplicates are not counted).
-static bool plait_clean(plait_soup *soup, int unique_count, plait_mesh_report *report)
+// vertex_of (NULL or one per file vertex, as plait_weld left it) is renumbered; -1 = removed.
+static bool plait_clean(plait_soup *soup, int unique_count, plait_mesh_report *report, int *vertex_of,
+                        int file_vertex_count)
 {
 	int kept_faces = 0, kept_indices = 0, read = 0;
 	for (int f = 0; f < soup->face_count; ++f) {
@@ -247,6 +252,8 @@ static bool plait_clean(plait_soup *soup, int unique_count, plait_mesh_report *r
 	}
 	for (int k = 0; k < soup->index_count; ++k)
 		soup->face_indices[k] = new_index[soup->face_indices[k]];
+	for (int i = 0; vertex_of != NULL && i < file_vertex_count; ++i)
+		vertex_of[i] = new_index[vertex_of[i]];
 	report->unused_vertices += unique_count - used;
 	soup->vertex_count = used;
 	free(new_index);
@@ -285,7 +292,9 @@ static bool plait_mesh_validate(const struct aiScene *scene, const char *path, p
 	return true;
 }
 
-bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *report, plait_tool_error *error)
+// The file's meshes as they are listed (with node transforms), nothing merged or dropped.
+static bool plait_mesh_read(const char *path, plait_soup *soup, plait_mesh_report *report,
+                            plait_tool_error *error)
 {
 	*soup = (plait_soup){0};
 	*report = (plait_mesh_report){0};
@@ -299,7 +308,7 @@ bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *repo
 		return false;
 	// No post-processing: aiProcess_JoinIdenticalVertices trusts face indices and merges NaN
 	// vertices out of sight before they can be reported, and in assimp 5.2 a failing
-	// aiApplyPostProcessing crashes. plait_weld below joins vertices instead, across meshes too.
+	// aiApplyPostProcessing crashes. plait_weld joins vertices instead, across meshes too.
 	// Triangulation stays off so quads stay quads.
 	const struct aiScene *scene = aiImportFile(path, 0);
 	if (scene == NULL)
@@ -325,20 +334,153 @@ bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *repo
 	}
 	report->mesh_count = (int)scene->mNumMeshes;
 	aiReleaseImport(scene);
-	int unique_count = 0;
-	if (ok && (!plait_weld(&b.soup, &unique_count) || !plait_clean(&b.soup, unique_count, report)))
-		ok = plait_tool_error_set(error, "%s: out of memory", path);
-	if (ok && b.soup.face_count == 0) {
-		if (report->degenerate_faces > 0 || report->point_line_faces > 0)
-			ok = plait_tool_error_set(error, "%s: no usable faces (%d degenerate, %d points or lines)", path,
-			                          report->degenerate_faces, report->point_line_faces);
-		else
-			ok = plait_tool_error_set(error, "%s: the file has no faces", path);
-	}
 	if (!ok) {
 		plait_soup_free(&b.soup);
 		return false;
 	}
 	*soup = b.soup;
 	return true;
+}
+
+// Merges, drops and removes what plait_mesh_load promises, in place.
+static bool plait_mesh_tidy(const char *path, plait_soup *soup, plait_mesh_report *report, int *vertex_of,
+                            plait_tool_error *error)
+{
+	int unique_count = 0, file_vertex_count = soup->vertex_count;
+	if (!plait_weld(soup, &unique_count, vertex_of) ||
+	    !plait_clean(soup, unique_count, report, vertex_of, file_vertex_count))
+		return plait_tool_error_set(error, "%s: out of memory", path);
+	if (soup->face_count == 0) {
+		if (report->degenerate_faces > 0 || report->point_line_faces > 0)
+			return plait_tool_error_set(error, "%s: no usable faces (%d degenerate, %d points or lines)",
+			                            path, report->degenerate_faces, report->point_line_faces);
+		return plait_tool_error_set(error, "%s: the file has no faces", path);
+	}
+	return true;
+}
+
+bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *report, plait_tool_error *error)
+{
+	return plait_mesh_load_layout(path, soup, report, NULL, error);
+}
+
+static int *plait_copy_ints(const int *from, int count)
+{
+	int *copy = malloc(sizeof(int) * (size_t)(count > 0 ? count : 1));
+	if (copy != NULL && count > 0)
+		memcpy(copy, from, sizeof(int) * (size_t)count);
+	return copy;
+}
+
+bool plait_mesh_load_layout(const char *path, plait_soup *soup, plait_mesh_report *report,
+                            plait_mesh_layout *layout, plait_tool_error *error)
+{
+	if (layout != NULL)
+		*layout = (plait_mesh_layout){0};
+	plait_soup read;
+	if (!plait_mesh_read(path, &read, report, error))
+		return false;
+	if (layout != NULL) {
+		layout->path = strdup(path);
+		layout->file_vertex_count = read.vertex_count;
+		layout->file_face_count = read.face_count;
+		layout->file_index_count = read.index_count;
+		layout->file_face_sizes = plait_copy_ints(read.face_sizes, read.face_count);
+		layout->file_face_indices = plait_copy_ints(read.face_indices, read.index_count);
+		layout->vertex_of = malloc(sizeof(int) * (size_t)(read.vertex_count > 0 ? read.vertex_count : 1));
+		if (layout->path == NULL || layout->file_face_sizes == NULL || layout->file_face_indices == NULL ||
+		    layout->vertex_of == NULL) {
+			plait_mesh_layout_free(layout);
+			plait_soup_free(&read);
+			return plait_tool_error_set(error, "%s: out of memory", path);
+		}
+	}
+	if (!plait_mesh_tidy(path, &read, report, layout != NULL ? layout->vertex_of : NULL, error)) {
+		if (layout != NULL)
+			plait_mesh_layout_free(layout);
+		plait_soup_free(&read);
+		return false;
+	}
+	if (layout != NULL) {
+		layout->vertex_count = read.vertex_count;
+		layout->face_count = read.face_count;
+	}
+	*soup = read;
+	return true;
+}
+
+void plait_mesh_layout_free(plait_mesh_layout *layout)
+{
+	free(layout->path);
+	free(layout->file_face_sizes);
+	free(layout->file_face_indices);
+	free(layout->vertex_of);
+	*layout = (plait_mesh_layout){0};
+}
+
+static bool plait_same_ints(const int *a, const int *b, int count)
+{
+	return count == 0 || memcmp(a, b, sizeof(int) * (size_t)count) == 0;
+}
+
+static bool plait_same_vec3(plait_vec3 a, plait_vec3 b)
+{
+	return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+// Vertices that are one in the layout's mesh must be one here too: at the same position. seen
+// holds a zero byte per vertex.
+static bool plait_take_positions(const plait_soup *read, const plait_mesh_layout *layout, char *seen,
+                                 plait_vec3 *positions)
+{
+	for (int i = 0; i < read->vertex_count; ++i) {
+		int v = layout->vertex_of[i];
+		if (v < 0)
+			continue;
+		if (!seen[v])
+			positions[v] = read->positions[i];
+		else if (!plait_same_vec3(positions[v], read->positions[i]))
+			return false;
+		seen[v] = 1;
+	}
+	return true;
+}
+
+bool plait_mesh_load_positions(const char *path, const plait_mesh_layout *layout, plait_vec3 *positions,
+                               plait_tool_error *error)
+{
+	plait_soup read;
+	plait_mesh_report report;
+	if (!plait_mesh_read(path, &read, &report, error))
+		return false;
+	char *seen = calloc((size_t)(layout->vertex_count > 0 ? layout->vertex_count : 1), 1);
+	if (seen == NULL) {
+		plait_soup_free(&read);
+		return plait_tool_error_set(error, "%s: out of memory", path);
+	}
+	bool same_mesh = read.vertex_count == layout->file_vertex_count &&
+	                 read.face_count == layout->file_face_count &&
+	                 read.index_count == layout->file_index_count &&
+	                 plait_same_ints(read.face_sizes, layout->file_face_sizes, read.face_count) &&
+	                 plait_same_ints(read.face_indices, layout->file_face_indices, read.index_count) &&
+	                 plait_take_positions(&read, layout, seen, positions);
+	free(seen);
+	if (same_mesh) {
+		plait_soup_free(&read);
+		return true;
+	}
+	// Say what differs in the terms of plait_mesh_load: the vertices and faces it would give.
+	plait_tool_error tidy_error;
+	bool tidy = plait_mesh_tidy(path, &read, &report, NULL, &tidy_error);
+	int vertices = tidy ? read.vertex_count : 0, faces = tidy ? read.face_count : 0;
+	plait_soup_free(&read);
+	if (vertices != layout->vertex_count || faces != layout->face_count)
+		return plait_tool_error_set(
+		    error, "%s: expected the %d vertices and %d faces of %s, got %d vert%s and %d face%s", path,
+		    layout->vertex_count, layout->face_count, layout->path, vertices, vertices == 1 ? "ex" : "ices",
+		    faces, faces == 1 ? "" : "s");
+	return plait_tool_error_set(error,
+	                            "%s: expected the faces of %s over the same vertices, got %d vertices and %d "
+	                            "faces joined differently",
+	                            path, layout->path, vertices, faces);
 }

@@ -22,4 +22,27 @@ typedef struct plait_mesh_report {
  * out of range, a non-finite coordinate, or no usable face. */
 bool plait_mesh_load(const char *path, plait_soup *soup, plait_mesh_report *report, plait_tool_error *error);
 
+/* How a file's vertices became a soup's: what it takes to read another file of the same mesh (a
+ * frame of an animation) into the same vertices, matching them by their place in the file
+ * rather than by position, so that nothing is merged or dropped differently from frame to frame. */
+typedef struct plait_mesh_layout {
+	char *path;                               /* the file it was made from */
+	int vertex_count, face_count;             /* of the soup */
+	int file_vertex_count;                    /* as the file lists them (OBJ: per face corner) */
+	int file_face_count, file_index_count;    /* faces as listed, before any was dropped */
+	int *file_face_sizes, *file_face_indices; /* in file vertices */
+	int *vertex_of; /* per file vertex: the soup vertex it became, or -1 (removed) */
+} plait_mesh_layout;
+
+/* plait_mesh_load that also fills layout (free with plait_mesh_layout_free) when not NULL. */
+bool plait_mesh_load_layout(const char *path, plait_soup *soup, plait_mesh_report *report,
+                            plait_mesh_layout *layout, plait_tool_error *error);
+void plait_mesh_layout_free(plait_mesh_layout *layout);
+
+/* Reads the vertex positions of a file with the layout's faces over the same vertices into
+ * positions (layout->vertex_count of them). Fails with a message naming the file when it cannot
+ * be read (as plait_mesh_load) or its faces differ: other counts, or vertices joined otherwise. */
+bool plait_mesh_load_positions(const char *path, const plait_mesh_layout *layout, plait_vec3 *positions,
+                               plait_tool_error *error);
+
 #endif

@@ -279,6 +279,7 @@ void plait_scene_free(plait_scene *scene)
 		free(object->pins);
 		free(object->keyframes);
 		free(object->mesh_path);
+		plait_mesh_sequence_free(&object->sequence);
 	}
 	for (int i = 0; i < scene->warning_count; ++i)
 		free(scene->warnings[i]);

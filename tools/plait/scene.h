@@ -4,6 +4,7 @@
 #ifndef PLAIT_SCENE_H
 #define PLAIT_SCENE_H
 
+#include "mesh_sequence.h"
 #include "tool_error.h"
 
 #include <plait/plait.h>
@@ -51,6 +52,10 @@ typedef struct plait_scene_object {
 
 	/* Cloth from a mesh file: the path as resolved against the scene's folder; NULL for grids. */
 	char *mesh_path;
+
+	/* Deforming mesh colliders: the shape at the end of each frame from 1, in the vertices of
+	 * the mesh (frame_count 0 for a rigid collider). */
+	plait_mesh_sequence sequence;
 } plait_scene_object;
 
 typedef struct plait_scene {
@@ -78,8 +83,9 @@ void plait_scene_free(plait_scene *scene);
  * failure nothing is left behind and *world is null. */
 bool plait_scene_create_world(const plait_scene *scene, plait_world_id *world, plait_tool_error *error);
 
-/* Call before stepping to frame `frame`: sets collider transforms from keyframes for that frame
- * and holds pinned vertices at their start positions. */
+/* Call before stepping to frame `frame`: sets collider transforms from keyframes and the shapes
+ * of deforming colliders from their sequences for that frame, and holds pinned vertices at
+ * their start positions. */
 bool plait_scene_apply_frame(const plait_scene *scene, plait_world_id world, int frame,
                              plait_tool_error *error);
 

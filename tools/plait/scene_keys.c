@@ -140,6 +140,7 @@ static const plait_scene_key plait_collider_keys[] = {
     PLAIT_VEC3("size", plait_collider_def, size),
     PLAIT_VEC3("rotation", plait_collider_def, rotation_deg),
     PLAIT_SPECIAL("mesh", false),
+    PLAIT_SPECIAL("sequence", false),
     PLAIT_SPECIAL("keyframes", false),
     // Colliders do not move by dynamics: damp is accepted (shared presets) and ignored.
     {"damp", PLAIT_KEY_FLOAT, PLAIT_BETWEEN(0, 100), PLAIT_KEY_IGNORED, false},

@@ -89,7 +89,9 @@ static bool plait_parse_grid(plait_scene_loader *loader, const json_t *json, pla
 	return true;
 }
 
-static bool plait_parse_mesh(plait_scene_loader *loader, const json_t *json, plait_scene_object *object)
+// layout (NULL unless a sequence follows) receives how the file's vertices became the mesh's.
+static bool plait_parse_mesh(plait_scene_loader *loader, const json_t *json, plait_scene_object *object,
+                             plait_mesh_layout *layout)
 {
 	plait_scene_reader *r = &loader->reader;
 	if (!json_is_string(json) || json_string_length(json) == 0) {
@@ -110,7 +112,7 @@ static bool plait_parse_mesh(plait_scene_loader *loader, const json_t *json, pla
 	plait_soup soup;
 	plait_mesh_report report;
 	plait_tool_error mesh_error;
-	if (!plait_mesh_load(object->mesh_path, &soup, &report, &mesh_error))
+	if (!plait_mesh_load_layout(object->mesh_path, &soup, &report, layout, &mesh_error))
 		return plait_reader_fail(r, "%s", mesh_error.message);
 	plait_take_soup(object, &soup);
 	if (report.degenerate_faces > 0)
@@ -211,7 +213,8 @@ bool plait_scene_parse_cloth(plait_scene_loader *loader, const json_t *json, pla
 	if (mesh == NULL && grid == NULL)
 		return plait_reader_fail(r, "a cloth needs either \"mesh\" (a file) or \"grid\" {size, resolution}");
 	size_t old = plait_reader_push_key(r, mesh != NULL ? "mesh" : "grid");
-	bool ok = mesh != NULL ? plait_parse_mesh(loader, mesh, object) : plait_parse_grid(loader, grid, object);
+	bool ok =
+	    mesh != NULL ? plait_parse_mesh(loader, mesh, object, NULL) : plait_parse_grid(loader, grid, object);
 	if (!ok)
 		return false;
 	plait_reader_pop(r, old);
@@ -299,6 +302,36 @@ static bool plait_parse_keyframes(plait_scene_reader *r, const json_t *json, pla
 	return true;
 }
 
+// A deforming mesh collider's shape frame by frame, every file read and checked now.
+static bool plait_parse_sequence(plait_scene_loader *loader, const json_t *json, plait_scene_object *object,
+                                 const plait_mesh_layout *layout)
+{
+	plait_scene_reader *r = &loader->reader;
+	size_t old = plait_reader_push_key(r, "sequence");
+	char got[64];
+	plait_json_describe(json, got, sizeof got);
+	if (!json_is_string(json) || json_string_length(json) == 0)
+		return plait_reader_fail(
+		    r,
+		    "expected a file path pattern with one frame number, as in \"arm.%%04d.obj\" "
+		    "(relative to the scene file's folder), got %s",
+		    got);
+	plait_frame_pattern pattern;
+	char why[128];
+	if (!plait_frame_pattern_parse(loader->base_dir, json_string_value(json), &pattern, why, sizeof why))
+		return plait_reader_fail(r,
+		                         "expected a file path pattern with one frame number, %%d or %%0Nd as in "
+		                         "\"arm.%%04d.obj\", got %s (%s)",
+		                         got, why);
+	plait_tool_error sequence_error;
+	bool ok = plait_mesh_sequence_load(&pattern, layout, &object->sequence, &sequence_error);
+	plait_frame_pattern_free(&pattern);
+	if (!ok)
+		return plait_reader_fail(r, "%s", sequence_error.message);
+	plait_reader_pop(r, old);
+	return true;
+}
+
 bool plait_scene_parse_collider(plait_scene_loader *loader, const json_t *json, plait_scene_object *object)
 {
 	plait_scene_reader *r = &loader->reader;
@@ -308,9 +341,9 @@ bool plait_scene_parse_collider(plait_scene_loader *loader, const json_t *json, 
 	                                             {"center", "radius", NULL},
 	                                             {"a", "b", "radius"},
 	                                             {"center", "size", "rotation"},
-	                                             {"mesh", NULL, NULL}};
+	                                             {"mesh", "sequence", NULL}};
 	static const char *const all_geometry[] = {"point", "normal", "center",   "radius", "a",
-	                                           "b",     "size",   "rotation", "mesh"};
+	                                           "b",     "size",   "rotation", "mesh",   "sequence"};
 	size_t old = plait_reader_push_key(r, "shape");
 	int shape;
 	if (!plait_reader_choice(r, json_object_get(json, "shape"), shapes, 5, &shape))
@@ -321,12 +354,20 @@ bool plait_scene_parse_collider(plait_scene_loader *loader, const json_t *json, 
 		const json_t *mesh = json_object_get(json, "mesh");
 		if (mesh == NULL)
 			return plait_reader_fail(r, "a mesh collider needs \"mesh\": the path of a mesh file");
+		const json_t *sequence = json_object_get(json, "sequence");
+		plait_mesh_layout layout;
 		size_t at = plait_reader_push_key(r, "mesh");
-		if (!plait_parse_mesh(loader, mesh, object))
+		if (!plait_parse_mesh(loader, mesh, object, sequence != NULL ? &layout : NULL))
 			return false;
 		plait_reader_pop(r, at);
+		if (sequence != NULL) {
+			bool ok = plait_parse_sequence(loader, sequence, object, &layout);
+			plait_mesh_layout_free(&layout);
+			if (!ok)
+				return false;
+		}
 	}
-	for (int i = 0; i < 9; ++i) {
+	for (int i = 0; i < 10; ++i) {
 		if (json_object_get(json, all_geometry[i]) == NULL)
 			continue;
 		bool used = false;

@@ -43,6 +43,7 @@ static plait_object_id plait_scene_create_object(plait_world_id world, const pla
 		if (def.shape == PLAIT_SHAPE_MESH) {
 			def.mesh = (plait_mesh_def){object->positions, object->vertex_count, object->face_sizes,
 			                            object->face_count, object->face_indices};
+			def.deforming = object->sequence.frame_count > 0;
 		}
 		return plait_create_collider(world, &def, error);
 	}
@@ -118,6 +119,14 @@ bool plait_scene_apply_frame(const plait_scene *scene, plait_world_id world, int
 				return plait_tool_error_set(error,
 				                            "%s: objects[%d] (\"%s\"): cannot move collider at frame %d: %s",
 				                            scene->file, i, object->name, frame, core_error.message);
+		}
+		if (object->type == PLAIT_OBJECT_COLLIDER && object->sequence.frame_count > 0) {
+			const plait_vec3 *shape = plait_mesh_sequence_frame(&object->sequence, frame);
+			if (plait_collider_set_mesh_positions(id, shape, object->sequence.vertex_count, &core_error) !=
+			    PLAIT_OK)
+				return plait_tool_error_set(
+				    error, "%s: objects[%d] (\"%s\"): cannot deform collider at frame %d: %s", scene->file, i,
+				    object->name, frame, core_error.message);
 		}
 		for (int p = 0; p < object->pin_count; ++p) {
 			int vertex = object->pins[p];
