@@ -1,5 +1,6 @@
 #include "collision/mesh_shape.h"
 
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -167,7 +168,53 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
 	shape->node_count = used;
 	plait_free(allocator, centroid);
 	plait_free(allocator, scratch);
+	shape->closed = plait_triangles_are_closed((const int(*)[3])shape->triangles, triangles, allocator);
+	if (shape->closed) {
+		double volume = 0.0;
+		for (int k = 0; k < triangles; ++k) {
+			vec3 a = shape->positions[shape->triangles[k][0]], b = shape->positions[shape->triangles[k][1]],
+			     c = shape->positions[shape->triangles[k][2]];
+			volume += (double)v3_dot(a, v3_cross(b, c));
+		}
+		shape->outward = volume >= 0.0 ? 1.0f : -1.0f;
+	}
 	return PLAIT_OK;
+}
+
+static int compare_edge_keys(const void *a, const void *b)
+{
+	uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+	return (x > y) - (x < y);
+}
+
+bool plait_triangles_are_closed(const int (*triangles)[3], int triangle_count, const plait_allocator *allocator)
+{
+	if (triangle_count <= 0) {
+		return false;
+	}
+	size_t edge_count = 3 * (size_t)triangle_count;
+	uint64_t *edges = plait_alloc(allocator, sizeof *edges * edge_count);
+	if (edges == NULL) {
+		return false; /* unknown: treated as open, which only skips the trapped check */
+	}
+	for (int t = 0; t < triangle_count; ++t) {
+		for (int k = 0; k < 3; ++k) {
+			uint32_t i = (uint32_t)triangles[t][k], j = (uint32_t)triangles[t][(k + 1) % 3];
+			edges[3 * (size_t)t + (size_t)k] = i < j ? (uint64_t)i << 32 | j : (uint64_t)j << 32 | i;
+		}
+	}
+	qsort(edges, edge_count, sizeof *edges, compare_edge_keys);
+	bool closed = true;
+	for (size_t e = 0; closed && e < edge_count;) {
+		size_t run = 1;
+		while (e + run < edge_count && edges[e + run] == edges[e]) {
+			++run;
+		}
+		closed = run == 2;
+		e += run;
+	}
+	plait_free(allocator, edges);
+	return closed;
 }
 
 plait_result plait_mesh_shape_make_deforming(plait_mesh_shape *shape, const plait_allocator *allocator,

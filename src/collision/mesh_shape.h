@@ -29,7 +29,15 @@ typedef struct plait_mesh_shape {
 	 * substep, positions holding those at its end. Normals are those at the end. */
 	vec3 *start_positions;
 	float largest_move; /* the longest vertex move over the substep (0 when rigid) */
+	/* Closed: every edge is shared by exactly two triangles, so the mesh has an inside. Then
+	 * outward is +1 when the triangles' normals point out of it (positive enclosed volume),
+	 * -1 when they point in. 0 for an open mesh. */
+	bool closed;
+	float outward;
 } plait_mesh_shape;
+
+/* Whether every edge of the triangles is shared by exactly two of them. */
+bool plait_triangles_are_closed(const int (*triangles)[3], int triangle_count, const plait_allocator *allocator);
 
 /* Copies positions and fans the faces into triangles; builds the hierarchy. */
 plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocator *allocator,

@@ -237,6 +237,9 @@ static vec3 side_normal(const mesh_pass *pass, int t, vec3 q, vec3 face, const f
 		q = q_start;
 		face = v3_length_sq(face_start) > 0.0f ? face_start : face;
 	}
+	if (pass->mesh->closed) {
+		return v3_scale(face, pass->mesh->outward); /* a closed mesh is only ever left outward */
+	}
 	return v3_dot(v3_sub(pass->p0, q), face) >= 0.0f ? face : v3_neg(face);
 }
 
@@ -324,7 +327,18 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 			}
 		}
 	}
-	plait_mesh_shape_visit(mesh, lower, upper, true, visit_proximity, &pass);
+	if (mesh->closed) {
+		/* Trapped check (seed 000 §4.4): whatever side the particle came from, it must end
+		 * outside a closed mesh, by the radius. The signed distance settles inside and
+		 * outside near edges and corners too. */
+		vec3 normal;
+		float outside = mesh->outward * plait_mesh_shape_distance(mesh, pass.p1, &normal);
+		if (outside < radius) {
+			push_out(&pass, v3_scale(normal, mesh->outward), radius - outside, v3(0.0f, 0.0f, 0.0f));
+		}
+	} else {
+		plait_mesh_shape_visit(mesh, lower, upper, true, visit_proximity, &pass);
+	}
 	if (!pass.moved) {
 		return false;
 	}

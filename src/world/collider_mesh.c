@@ -79,12 +79,6 @@ plait_result plait_collider_get_shape(plait_object_id id, plait_collider_shape *
 	return PLAIT_OK;
 }
 
-static int compare_edges(const void *a, const void *b)
-{
-	uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-	return (x > y) - (x < y);
-}
-
 bool plait_collider_is_closed(plait_object_id id)
 {
 	plait_result result;
@@ -99,31 +93,7 @@ bool plait_collider_is_closed(plait_object_id id)
 	if (mesh == NULL || mesh->triangle_count == 0) {
 		return false;
 	}
-	const plait_allocator *allocator = &id.world->allocator;
-	size_t edge_count = 3 * (size_t)mesh->triangle_count;
-	uint64_t *edges = plait_alloc(allocator, sizeof *edges * edge_count);
-	if (edges == NULL) {
-		return false;
-	}
-	for (int t = 0; t < mesh->triangle_count; ++t) {
-		for (int k = 0; k < 3; ++k) {
-			uint32_t i = (uint32_t)mesh->triangles[t][k], j = (uint32_t)mesh->triangles[t][(k + 1) % 3];
-			edges[3 * (size_t)t + (size_t)k] = i < j ? (uint64_t)i << 32 | j : (uint64_t)j << 32 | i;
-		}
-	}
-	qsort(edges, edge_count, sizeof *edges, compare_edges);
-	/* Closed: every edge appears exactly twice, once for each triangle beside it. */
-	bool closed = true;
-	for (size_t e = 0; closed && e < edge_count;) {
-		size_t run = 1;
-		while (e + run < edge_count && edges[e + run] == edges[e]) {
-			++run;
-		}
-		closed = run == 2;
-		e += run;
-	}
-	plait_free(allocator, edges);
-	return closed;
+	return mesh->closed;
 }
 
 /* A lathe: a pole, `rings` rings of LATHE_SEGMENTS vertices, another pole, about axis w. */
