@@ -369,6 +369,45 @@ Test(cli_run, scene_error_exits_1_and_writes_nothing)
 	free(dir);
 }
 
+// A range the library checks (collision_layer, self_collide_width_scale): exit 1, a message
+// naming the scene, the object and the key, and no output.
+Test(cli_run, collision_settings_out_of_range_exit_1_naming_the_object)
+{
+	static const struct {
+		const char *json;
+		const char *message;
+	} cases[] = {
+	    {"{\"objects\": [{\"name\": \"shirt\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], "
+	     "\"resolution\": [2, 2]},"
+	     " \"self_collision_flag\": \"vertex\", \"self_collide_width_scale\": 0.001}]}",
+	     "scene.json: objects[0] (cloth \"shirt\"): the solver rejected it: cloth 'shirt': "
+	     "self_collide_width_scale must be in 0.01..100, got 0.001\n"},
+	    {"{\"objects\": [{\"name\": \"ground\", \"type\": \"collider\", \"shape\": \"plane\"},"
+	     " {\"name\": \"coat\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	     " \"collision_layer\": 1001}]}",
+	     "scene.json: objects[1] (cloth \"coat\"): the solver rejected it: cloth 'coat': "
+	     "collision_layer must be in 0..1000, got 1001\n"},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+		char *dir = make_temp_dir();
+		char *scene = write_scene(dir, cases[i].json);
+		char out_dir[512];
+		snprintf(out_dir, sizeof out_dir, "%s/out", dir);
+		const char *argv[] = {"plait", "run", scene, "--out", out_dir};
+		cli_result r = run_cli(5, argv);
+		cr_expect_eq(r.code, 1);
+		// The path as given, then the message.
+		const char *message = strstr(r.err, "scene.json: ");
+		cr_expect(strncmp(r.err, dir, strlen(dir)) == 0, "%s", r.err);
+		cr_expect(message != NULL && strcmp(message, cases[i].message) == 0, "%s", r.err);
+		cr_expect(!exists(dir, "out"), "the output folder was created for a bad scene");
+		free_result(&r);
+		free(scene);
+		remove_tree(dir);
+		free(dir);
+	}
+}
+
 // A world that overflows to infinity: the run stops with exit 1 and keeps the frames before.
 Test(cli_run, simulation_failure_keeps_written_frames)
 {
