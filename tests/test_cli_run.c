@@ -154,19 +154,40 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
 	char *text = read_file(path, NULL);
 	cr_assert_not_null(text);
-	static const char *const keys[] = {"frame",        "ms",        "kinetic_energy", "max_strain",
-	                                   "penetrations", "nonfinite", "contacts"};
+	// In this order: the collision counters follow contacts.
+	static const char *const keys[] = {"frame",        "ms",          "kinetic_energy", "max_strain",
+	                                   "penetrations", "nonfinite",   "contacts",       "ccd_hits",
+	                                   "failsafe",     "collision_ms"};
 	int lines = 0;
 	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
 		json_error_t error;
-		json_t *json = json_loads(line, 0, &error);
+		json_t *json = json_loads(line, JSON_PRESERVE_ORDER, &error);
 		cr_assert_not_null(json, "line %d is not JSON: %s (%s)", lines, line, error.text);
 		cr_expect(json_is_object(json));
-		for (size_t k = 0; k < sizeof keys / sizeof keys[0]; ++k)
-			cr_expect_not_null(json_object_get(json, keys[k]), "line %d has no %s: %s", lines, keys[k], line);
+		cr_expect_eq(json_object_size(json), sizeof keys / sizeof keys[0], "line %d: %s", lines, line);
+		const char *key;
+		json_t *value;
+		size_t k = 0;
+		json_object_foreach(json, key, value)
+		{
+			if (k < sizeof keys / sizeof keys[0])
+				cr_expect_str_eq(key, keys[k], "line %d, key %zu: %s", lines, k, line);
+			++k;
+		}
 		cr_expect_eq(json_integer_value(json_object_get(json, "frame")), lines);
-		if (lines == 0)
+		cr_expect(json_is_integer(json_object_get(json, "ccd_hits")), "line %d: %s", lines, line);
+		cr_expect(json_is_integer(json_object_get(json, "failsafe")), "line %d: %s", lines, line);
+		cr_expect(json_is_number(json_object_get(json, "collision_ms")), "line %d: %s", lines, line);
+		cr_expect_geq(json_integer_value(json_object_get(json, "ccd_hits")), 0);
+		cr_expect_geq(json_integer_value(json_object_get(json, "failsafe")), 0);
+		cr_expect_geq(json_number_value(json_object_get(json, "collision_ms")), 0.0);
+		if (lines == 0) {
+			// Frame 0 is logged before any step.
 			cr_expect_float_eq(json_number_value(json_object_get(json, "ms")), 0.0, 0.0);
+			cr_expect_eq(json_integer_value(json_object_get(json, "ccd_hits")), 0);
+			cr_expect_eq(json_integer_value(json_object_get(json, "failsafe")), 0);
+			cr_expect_float_eq(json_number_value(json_object_get(json, "collision_ms")), 0.0, 0.0);
+		}
 		json_decref(json);
 		++lines;
 	}
