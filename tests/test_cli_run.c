@@ -154,19 +154,40 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
 	char *text = read_file(path, NULL);
 	cr_assert_not_null(text);
-	static const char *const keys[] = {"frame",        "ms",        "kinetic_energy", "max_strain",
-	                                   "penetrations", "nonfinite", "contacts"};
+	// In this order: the collision counters follow contacts.
+	static const char *const keys[] = {"frame",        "ms",          "kinetic_energy", "max_strain",
+	                                   "penetrations", "nonfinite",   "contacts",       "ccd_hits",
+	                                   "failsafe",     "collision_ms"};
 	int lines = 0;
 	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
 		json_error_t error;
-		json_t *json = json_loads(line, 0, &error);
+		json_t *json = json_loads(line, JSON_PRESERVE_ORDER, &error);
 		cr_assert_not_null(json, "line %d is not JSON: %s (%s)", lines, line, error.text);
 		cr_expect(json_is_object(json));
-		for (size_t k = 0; k < sizeof keys / sizeof keys[0]; ++k)
-			cr_expect_not_null(json_object_get(json, keys[k]), "line %d has no %s: %s", lines, keys[k], line);
+		cr_expect_eq(json_object_size(json), sizeof keys / sizeof keys[0], "line %d: %s", lines, line);
+		const char *key;
+		json_t *value;
+		size_t k = 0;
+		json_object_foreach(json, key, value)
+		{
+			if (k < sizeof keys / sizeof keys[0])
+				cr_expect_str_eq(key, keys[k], "line %d, key %zu: %s", lines, k, line);
+			++k;
+		}
 		cr_expect_eq(json_integer_value(json_object_get(json, "frame")), lines);
-		if (lines == 0)
+		cr_expect(json_is_integer(json_object_get(json, "ccd_hits")), "line %d: %s", lines, line);
+		cr_expect(json_is_integer(json_object_get(json, "failsafe")), "line %d: %s", lines, line);
+		cr_expect(json_is_number(json_object_get(json, "collision_ms")), "line %d: %s", lines, line);
+		cr_expect_geq(json_integer_value(json_object_get(json, "ccd_hits")), 0);
+		cr_expect_geq(json_integer_value(json_object_get(json, "failsafe")), 0);
+		cr_expect_geq(json_number_value(json_object_get(json, "collision_ms")), 0.0);
+		if (lines == 0) {
+			// Frame 0 is logged before any step.
 			cr_expect_float_eq(json_number_value(json_object_get(json, "ms")), 0.0, 0.0);
+			cr_expect_eq(json_integer_value(json_object_get(json, "ccd_hits")), 0);
+			cr_expect_eq(json_integer_value(json_object_get(json, "failsafe")), 0);
+			cr_expect_float_eq(json_number_value(json_object_get(json, "collision_ms")), 0.0, 0.0);
+		}
 		json_decref(json);
 		++lines;
 	}
@@ -367,6 +388,45 @@ Test(cli_run, scene_error_exits_1_and_writes_nothing)
 	free(scene);
 	remove_tree(dir);
 	free(dir);
+}
+
+// A range the library checks (collision_layer, self_collide_width_scale): exit 1, a message
+// naming the scene, the object and the key, and no output.
+Test(cli_run, collision_settings_out_of_range_exit_1_naming_the_object)
+{
+	static const struct {
+		const char *json;
+		const char *message;
+	} cases[] = {
+	    {"{\"objects\": [{\"name\": \"shirt\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], "
+	     "\"resolution\": [2, 2]},"
+	     " \"self_collision_flag\": \"vertex\", \"self_collide_width_scale\": 0.001}]}",
+	     "scene.json: objects[0] (cloth \"shirt\"): the solver rejected it: cloth 'shirt': "
+	     "self_collide_width_scale must be in 0.01..100, got 0.001\n"},
+	    {"{\"objects\": [{\"name\": \"ground\", \"type\": \"collider\", \"shape\": \"plane\"},"
+	     " {\"name\": \"coat\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	     " \"collision_layer\": 1001}]}",
+	     "scene.json: objects[1] (cloth \"coat\"): the solver rejected it: cloth 'coat': "
+	     "collision_layer must be in 0..1000, got 1001\n"},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+		char *dir = make_temp_dir();
+		char *scene = write_scene(dir, cases[i].json);
+		char out_dir[512];
+		snprintf(out_dir, sizeof out_dir, "%s/out", dir);
+		const char *argv[] = {"plait", "run", scene, "--out", out_dir};
+		cli_result r = run_cli(5, argv);
+		cr_expect_eq(r.code, 1);
+		// The path as given, then the message.
+		const char *message = strstr(r.err, "scene.json: ");
+		cr_expect(strncmp(r.err, dir, strlen(dir)) == 0, "%s", r.err);
+		cr_expect(message != NULL && strcmp(message, cases[i].message) == 0, "%s", r.err);
+		cr_expect(!exists(dir, "out"), "the output folder was created for a bad scene");
+		free_result(&r);
+		free(scene);
+		remove_tree(dir);
+		free(dir);
+	}
 }
 
 // A world that overflows to infinity: the run stops with exit 1 and keeps the frames before.

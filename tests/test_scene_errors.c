@@ -214,6 +214,58 @@ Test(scene_errors, unknown_bend_model)
 	    "scene.json: objects[0].shear_iteration: unknown key (did you mean \"shear_iterations\"?)");
 }
 
+Test(scene_errors, bad_collision_settings)
+{
+	// self_collision_flag takes the names of plait_self_collision_flag, in its order.
+	expect_message(
+	    "{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"self_collision_flag\": \"faces\"}]}",
+	    "scene.json: objects[0].self_collision_flag: expected one of full_surface, vertex_face, vertex, got "
+	    "\"faces\"");
+	expect_message("{\"objects\": [{\"type\": \"collider\", \"shape\": \"plane\"},"
+	               " {\"type\": \"cloth\", " CLOTH_GRID ", \"self_collision_flag\": 2}]}",
+	               "scene.json: objects[1].self_collision_flag: expected one of full_surface, vertex_face, "
+	               "vertex, got 2");
+	expect_message(
+	    "{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"self_collision_flag\": \"VERTEX\"}]}",
+	    "scene.json: objects[0].self_collision_flag: expected one of full_surface, vertex_face, vertex, got "
+	    "\"VERTEX\"");
+	// Value types; the ranges are the library's (test_scene_load.c, test_cli_run.c).
+	expect_message("{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID
+	               ", \"self_collide_width_scale\": \"2\"}]}",
+	               "scene.json: objects[0].self_collide_width_scale: expected a number, got \"2\"");
+	expect_message("{\"objects\": [{\"type\": \"particles\", \"positions\": [[0,0,0]],"
+	               " \"collision_layer\": 1.5}]}",
+	               "scene.json: objects[0].collision_layer: expected an integer, got 1.5");
+	expect_message(
+	    "{\"objects\": [{\"type\": \"collider\", \"shape\": \"plane\", \"collision_layer\": \"top\"}]}",
+	    "scene.json: objects[0].collision_layer: expected an integer, got \"top\"");
+	expect_message(
+	    "{\"objects\": [{\"type\": \"curve\", \"positions\": [[0,0,0],[1,0,0]],"
+	    " \"collision_layer\": 3000000000}]}",
+	    "scene.json: objects[0].collision_layer: expected an integer, got 3000000000 (too large for "
+	    "a 32-bit integer)");
+	expect_contains(
+	    "{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"self_collide_width_scale\": 1e39}]}",
+	    "scene.json: objects[0].self_collide_width_scale: expected a number, got 1e+39 (too large "
+	    "for single precision)");
+	// Misspelt keys are suggested their closest valid key.
+	expect_message(
+	    "{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"self_colision_flag\": \"vertex\"}]}",
+	    "scene.json: objects[0].self_colision_flag: unknown key (did you mean \"self_collision_flag\"?)");
+	expect_message("{\"objects\": [{\"type\": \"cloth\", " CLOTH_GRID ", \"self_colide_width_scale\": 2}]}",
+	               "scene.json: objects[0].self_colide_width_scale: unknown key (did you mean "
+	               "\"self_collide_width_scale\"?)");
+	expect_message("{\"objects\": [{\"type\": \"collider\", \"shape\": \"plane\", \"colision_layer\": 1}]}",
+	               "scene.json: objects[0].colision_layer: unknown key (did you mean \"collision_layer\"?)");
+	expect_message(
+	    "{\"objects\": [{\"type\": \"particles\", \"positions\": [[0,0,0]], \"collision_layr\": 1}]}",
+	    "scene.json: objects[0].collision_layr: unknown key (did you mean \"collision_layer\"?)");
+	// Self-collision settings are cloth keys only.
+	expect_contains("{\"objects\": [{\"type\": \"particles\", \"positions\": [[0,0,0]],"
+	                " \"self_collision_flag\": \"vertex\"}]}",
+	                "scene.json: objects[0].self_collision_flag: unknown key (valid keys here: name, type,");
+}
+
 Test(scene_errors, mesh_collider_needs_a_mesh_file)
 {
 	expect_message("{\"objects\": [{\"type\": \"collider\", \"shape\": \"mesh\"}]}",

@@ -210,15 +210,21 @@ Test(scene_load, defaults_come_from_the_api)
 	cr_expect_eq(scene.objects[0].cloth.iterations, cloth.iterations);
 	cr_expect_eq(scene.objects[0].cloth.shear_iterations, cloth.shear_iterations);
 	cr_expect_eq(scene.objects[0].cloth.bend_iterations, cloth.bend_iterations);
+	cr_expect_eq(scene.objects[0].cloth.self_collision_flag, cloth.self_collision_flag);
+	cr_expect_float_eq(scene.objects[0].cloth.self_collide_width_scale, cloth.self_collide_width_scale, 0.0f);
+	cr_expect_eq(scene.objects[0].cloth.surface.collision_layer, cloth.surface.collision_layer);
 	plait_curve_def curve = plait_default_curve_def();
 	cr_expect_float_eq(scene.objects[1].curve.mass, curve.mass, 0.0f);
 	cr_expect_float_eq(scene.objects[1].curve.stretch_resistance, curve.stretch_resistance, 0.0f);
+	cr_expect_eq(scene.objects[1].curve.surface.collision_layer, curve.surface.collision_layer);
 	plait_particles_def particles = plait_default_particles_def();
 	cr_expect_float_eq(scene.objects[2].particles.mass, particles.mass, 0.0f);
 	cr_expect_float_eq(scene.objects[2].particles.radius, particles.radius, 0.0f);
 	cr_expect_eq(scene.objects[2].particles.self_collide, particles.self_collide);
+	cr_expect_eq(scene.objects[2].particles.surface.collision_layer, particles.surface.collision_layer);
 	plait_collider_def collider = plait_default_collider_def();
 	expect_vec3(scene.objects[3].collider.normal, collider.normal.x, collider.normal.y, collider.normal.z);
+	cr_expect_eq(scene.objects[3].collider.surface.collision_layer, collider.surface.collision_layer);
 	cr_expect_float_eq(scene.objects[3].collider.transform.scale, 1.0f, 0.0f);
 	cr_expect_str_eq(scene.objects[0].name, "cloth0");
 	cr_expect_str_eq(scene.objects[3].name, "collider3");
@@ -305,13 +311,15 @@ Test(scene_load, every_example_scene_loads_and_builds_a_world)
 	cr_expect_geq(count, 5);
 }
 
-// The cells of a docs table row "| `key` | type | default | ...", or false for other lines.
-static bool doc_row(const char *line, char cells[4][96])
+// The first cells of a docs table row "| `key` | type | default | unit | range | ...", or false
+// for other lines.
+#define DOC_CELLS 5
+static bool doc_row(const char *line, char cells[DOC_CELLS][96])
 {
 	if (strncmp(line, "| `", 3) != 0)
 		return false;
 	const char *p = line + 1;
-	for (int c = 0; c < 4; ++c) {
+	for (int c = 0; c < DOC_CELLS; ++c) {
 		const char *end = strchr(p, '|');
 		if (end == NULL)
 			return false;
@@ -330,7 +338,7 @@ static bool doc_row(const char *line, char cells[4][96])
 }
 
 // Finds the row of key in the table under "<!-- keys: CONTEXT -->".
-static bool doc_find(const char *docs, const char *context, const char *key, char cells[4][96])
+static bool doc_find(const char *docs, const char *context, const char *key, char cells[DOC_CELLS][96])
 {
 	char marker[64];
 	snprintf(marker, sizeof marker, "<!-- keys: %s -->", context);
@@ -385,7 +393,7 @@ Test(scene_load, docs_list_every_key_with_the_api_default)
 		const plait_scene_key *keys = plait_scene_keys((plait_scene_context)c, &count);
 		for (int i = 0; i < count; ++i) {
 			const plait_scene_key *k = &keys[i];
-			char cells[4][96];
+			char cells[DOC_CELLS][96];
 			if (!doc_find(docs, context, k->name, cells)) {
 				cr_expect_fail("docs/scene-format.md: no row for `%s` in the %s table", k->name, context);
 				continue;
@@ -431,6 +439,25 @@ Test(scene_load, docs_list_every_key_with_the_api_default)
 				          actual.x, actual.y, actual.z);
 				break;
 			}
+			case PLAIT_KEY_CHOICE: {
+				// Default `"name"`; type string; range the names in enum order, `a`, `b`, ...
+				int actual;
+				memcpy(&actual, value, sizeof actual);
+				cr_assert(actual >= 0 && actual < k->choice_count, "%s.%s: default %d has no name", context,
+				          k->name, actual);
+				char expected[96];
+				snprintf(expected, sizeof expected, "`\"%s\"`", k->choices[actual]);
+				cr_expect_str_eq(doc, expected, "%s.%s: docs say %s, the library's default is %s", context,
+				                 k->name, doc, expected);
+				cr_expect_str_eq(cells[1], "string", "%s.%s: type", context, k->name);
+				char names[96] = "";
+				for (int v = 0; v < k->choice_count; ++v) {
+					size_t used = strlen(names);
+					snprintf(names + used, sizeof names - used, "%s`%s`", v > 0 ? ", " : "", k->choices[v]);
+				}
+				cr_expect_str_eq(cells[4], names, "%s.%s: the values", context, k->name);
+				break;
+			}
 			case PLAIT_KEY_SPECIAL:
 				break;
 			}
@@ -468,6 +495,92 @@ Test(scene_load, self_collide_is_read_for_cloth)
 	     &scene);
 	cr_assert(scene.objects[0].cloth.self_collide);
 	plait_scene_free(&scene);
+}
+
+// Collision layers on every kind of object, and the cloth's self-collision settings, reach the
+// defs the world is created from.
+Test(scene_load, collision_settings_are_read_for_every_object)
+{
+	plait_scene scene;
+	load(
+	    "{\"objects\": ["
+	    " {\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]}, \"collision_layer\": 3,"
+	    "  \"self_collide\": true, \"self_collision_flag\": \"vertex_face\", \"self_collide_width_scale\": "
+	    "2.5},"
+	    " {\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	    "  \"self_collision_flag\": \"vertex\", \"self_collide_width_scale\": 0.01},"
+	    " {\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	    "  \"self_collision_flag\": \"full_surface\", \"self_collide_width_scale\": 100, "
+	    "\"collision_layer\": 1000},"
+	    " {\"type\": \"curve\", \"positions\": [[0,0,0], [1,0,0]], \"collision_layer\": 1},"
+	    " {\"type\": \"particles\", \"positions\": [[0,0,0]], \"collision_layer\": 2.0},"
+	    " {\"type\": \"collider\", \"shape\": \"plane\", \"collision_layer\": 7}]}",
+	    &scene);
+	const plait_cloth_def *a = &scene.objects[0].cloth;
+	cr_expect_eq(a->surface.collision_layer, 3);
+	cr_expect(a->self_collide);
+	cr_expect_eq(a->self_collision_flag, PLAIT_SELF_COLLIDE_VERTEX_FACE);
+	cr_expect_float_eq(a->self_collide_width_scale, 2.5f, 0.0f);
+	const plait_cloth_def *b = &scene.objects[1].cloth;
+	cr_expect_eq(b->surface.collision_layer, 0);
+	cr_expect_eq(b->self_collision_flag, PLAIT_SELF_COLLIDE_VERTEX);
+	cr_expect_float_eq(b->self_collide_width_scale, 0.01f, 0.0f);
+	const plait_cloth_def *c = &scene.objects[2].cloth;
+	cr_expect_eq(c->surface.collision_layer, 1000);
+	cr_expect_eq(c->self_collision_flag, PLAIT_SELF_COLLIDE_FULL_SURFACE);
+	cr_expect_float_eq(c->self_collide_width_scale, 100.0f, 0.0f);
+	cr_expect_eq(scene.objects[3].curve.surface.collision_layer, 1);
+	cr_expect_eq(scene.objects[4].particles.surface.collision_layer, 2);
+	cr_expect_eq(scene.objects[5].collider.surface.collision_layer, 7);
+	// The library takes what the loader accepts, the ends of the ranges included.
+	plait_world_id world;
+	plait_tool_error error;
+	cr_assert(plait_scene_create_world(&scene, &world, &error), "%s", error.message);
+	plait_destroy_world(world);
+	plait_scene_free(&scene);
+}
+
+// The library checks the ranges; the tool's message names the scene, the object and the key.
+Test(scene_load, collision_settings_out_of_range_are_rejected_naming_the_object)
+{
+	static const struct {
+		const char *json;
+		const char *message;
+	} cases[] = {
+	    {"{\"objects\": [{\"type\": \"collider\", \"shape\": \"plane\"}, {\"name\": \"shirt\", \"type\": "
+	     "\"cloth\","
+	     " \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]}, \"self_collide_width_scale\": 0}]}",
+	     "scene.json: objects[1] (cloth \"shirt\"): the solver rejected it: cloth 'shirt': "
+	     "self_collide_width_scale must be in 0.01..100, got 0"},
+	    {"{\"objects\": [{\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	     " \"self_collide_width_scale\": 101}]}",
+	     "scene.json: objects[0] (cloth \"cloth0\"): the solver rejected it: cloth 'cloth0': "
+	     "self_collide_width_scale must be in 0.01..100, got 101"},
+	    {"{\"objects\": [{\"type\": \"cloth\", \"grid\": {\"size\": [1, 1], \"resolution\": [2, 2]},"
+	     " \"collision_layer\": 1001}]}",
+	     "scene.json: objects[0] (cloth \"cloth0\"): the solver rejected it: cloth 'cloth0': "
+	     "collision_layer must be in 0..1000, got 1001"},
+	    {"{\"objects\": [{\"type\": \"curve\", \"name\": \"rope\", \"positions\": [[0,0,0], [1,0,0]],"
+	     " \"collision_layer\": -1}]}",
+	     "scene.json: objects[0] (curve \"rope\"): the solver rejected it: curve 'rope': "
+	     "collision_layer must be in 0..1000, got -1"},
+	    {"{\"objects\": [{\"type\": \"particles\", \"positions\": [[0,0,0]], \"collision_layer\": 5000}]}",
+	     "scene.json: objects[0] (particles \"particles0\"): the solver rejected it: particles 'particles0': "
+	     "collision_layer must be in 0..1000, got 5000"},
+	    {"{\"objects\": [{\"type\": \"collider\", \"shape\": \"plane\", \"collision_layer\": -7}]}",
+	     "scene.json: objects[0] (collider \"collider0\"): the solver rejected it: collider 'collider0': "
+	     "collision_layer must be in 0..1000, got -7"},
+	};
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+		plait_scene scene;
+		load(cases[i].json, &scene);
+		plait_world_id world;
+		plait_tool_error error = {{0}};
+		cr_expect_not(plait_scene_create_world(&scene, &world, &error), "%s", cases[i].json);
+		cr_expect(plait_world_id_is_null(world));
+		cr_expect_str_eq(error.message, cases[i].message);
+		plait_scene_free(&scene);
+	}
 }
 
 Test(scene_load, bend_model_and_iterations_are_read_for_cloth)

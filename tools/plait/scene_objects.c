@@ -218,27 +218,6 @@ bool plait_scene_parse_cloth(plait_scene_loader *loader, const json_t *json, pla
 	if (!ok)
 		return false;
 	plait_reader_pop(r, old);
-	const json_t *tethers = json_object_get(json, "tethers");
-	if (tethers != NULL) {
-		static const char *const modes[] = {"none", "euclidean", "geodesic"};
-		size_t at = plait_reader_push_key(r, "tethers");
-		int mode;
-		if (!plait_reader_choice(r, tethers, modes, 3, &mode))
-			return false;
-		object->cloth.tethers = (plait_tether_mode)mode;
-		plait_reader_pop(r, at);
-	}
-	const json_t *bend_model = json_object_get(json, "bend_model");
-	if (bend_model != NULL) {
-		// In the order of plait_bend_model.
-		static const char *const models[] = {"dihedral", "distance"};
-		size_t at = plait_reader_push_key(r, "bend_model");
-		int model;
-		if (!plait_reader_choice(r, bend_model, models, 2, &model))
-			return false;
-		object->cloth.bend_model = (plait_bend_model)model;
-		plait_reader_pop(r, at);
-	}
 	return plait_parse_vertex_extras(r, json, object);
 }
 

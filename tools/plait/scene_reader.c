@@ -197,6 +197,14 @@ bool plait_reader_read_keys(plait_scene_reader *reader, const json_t *object, co
 		case PLAIT_KEY_VEC3:
 			ok = plait_reader_vec3(reader, value, slot);
 			break;
+		case PLAIT_KEY_CHOICE: {
+			// The destination is a C enum, which scene_keys.c checks is the size of an int.
+			int choice = 0;
+			ok = plait_reader_choice(reader, value, k->choices, k->choice_count, &choice);
+			if (ok)
+				memcpy(slot, &choice, sizeof choice);
+			break;
+		}
 		case PLAIT_KEY_SPECIAL:
 			break;
 		}
@@ -239,10 +247,7 @@ bool plait_reader_float(plait_scene_reader *reader, const json_t *value, double 
 
 bool plait_reader_int(plait_scene_reader *reader, const json_t *value, double min, double max, int *out)
 {
-	if (min < (double)INT_MIN)
-		min = (double)INT_MIN;
-	if (max > (double)INT_MAX)
-		max = (double)INT_MAX;
+	// An unbounded range (keys whose range the library checks) is described as none at all.
 	char range[96];
 	plait_describe_range(min, max, false, range, sizeof range);
 	char got[64];
@@ -251,6 +256,9 @@ bool plait_reader_int(plait_scene_reader *reader, const json_t *value, double mi
 	double v = json_is_number(value) ? json_number_value(value) : NAN;
 	if (!json_is_number(value) || v != floor(v) || v < min || v > max)
 		return plait_reader_fail(reader, "expected an integer%s, got %s", range, got);
+	if (v < (double)INT_MIN || v > (double)INT_MAX)
+		return plait_reader_fail(reader, "expected an integer%s, got %s (too large for a 32-bit integer)",
+		                         range, got);
 	*out = (int)v;
 	return true;
 }

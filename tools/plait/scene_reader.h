@@ -26,6 +26,7 @@ typedef enum plait_key_kind {
 	PLAIT_KEY_UINT32,
 	PLAIT_KEY_BOOL,
 	PLAIT_KEY_VEC3,
+	PLAIT_KEY_CHOICE, /* a string naming a value of a C enum (an int), e.g. bend_model */
 	PLAIT_KEY_SPECIAL,
 } plait_key_kind;
 
@@ -40,6 +41,8 @@ typedef struct plait_scene_key {
 	bool min_excluded; /* the range is (min, max] rather than [min, max] */
 	size_t offset;     /* byte offset into the destination struct */
 	bool required;
+	const char *const *choices; /* CHOICE: the value names, choices[v] naming enum value v */
+	int choice_count;
 } plait_scene_key;
 
 /* Key path editing: push returns the old length to give back to pop. */

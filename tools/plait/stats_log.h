@@ -11,7 +11,8 @@ typedef struct plait_stats_log {
 } plait_stats_log;
 
 bool plait_stats_log_open(plait_stats_log *log, const char *dir, plait_tool_error *error);
-/* {"frame":F,"ms":M,"kinetic_energy":..,"max_strain":..,"penetrations":..,"nonfinite":..,"contacts":..};
+/* {"frame":F,"ms":M,"kinetic_energy":..,"max_strain":..,"penetrations":..,"nonfinite":..,"contacts":..,
+ *  "ccd_hits":..,"failsafe":..,"collision_ms":..};
  * frame replaces stats.frame (frame 0 is logged before any step); non-finite numbers become null. */
 /* check may be NULL; when given, its counts are written as "intersections" and
  * "inside_colliders". */
