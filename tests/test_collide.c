@@ -1,0 +1,326 @@
+/* Space-time collisions between cloths and within a cloth (issue #3): the scenes of
+ * tests/support/collide_scenes.h, at sizes that fit a test run, must show no crossing
+ * triangles and no vertex inside a collider in any frame, and stacked cloths keep their order;
+ * the parts (failsafe, layers, start-frame thickness, friction) are checked on small cases. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "collide_scenes.h"
+#include "test_support.h"
+
+typedef struct scene_totals {
+	int worst_crossings, crossing_frames, worst_inside, ccd_hits, failsafe;
+} scene_totals;
+
+/* Runs a scene for `frames` (0: its own length), checking every frame. */
+static scene_totals run_scene(collide_scene_kind kind, int n, int frames, collide_scene *kept)
+{
+	collide_scene scene;
+	plait_error error;
+	cr_assert(collide_scene_create(&scene, kind, n, NULL, &error), "%s: %s", collide_scene_names[kind],
+	          error.message);
+	scene_totals totals = {0};
+	int count = frames > 0 ? frames : scene.frames;
+	for (int f = 1; f <= count; ++f) {
+		cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s frame %d: %s",
+		             collide_scene_names[kind], f, error.message);
+		plait_intersection_report report;
+		cr_assert_eq(plait_world_check_intersections(scene.world, &report, &error), PLAIT_OK);
+		plait_frame_stats stats = plait_world_get_stats(scene.world);
+		totals.ccd_hits += stats.ccd_hits;
+		totals.failsafe += stats.failsafe;
+		cr_assert_eq(stats.nonfinite, 0);
+		if (report.triangle_pairs > 0 || report.inside_colliders > 0) {
+			fprintf(stderr, "%s n=%d frame %d: %d crossing triangle pairs, %d vertices inside colliders\n",
+			        collide_scene_names[kind], n, f, report.triangle_pairs, report.inside_colliders);
+		}
+		totals.crossing_frames += report.triangle_pairs > 0;
+		totals.worst_crossings =
+		    report.triangle_pairs > totals.worst_crossings ? report.triangle_pairs : totals.worst_crossings;
+		totals.worst_inside =
+		    report.inside_colliders > totals.worst_inside ? report.inside_colliders : totals.worst_inside;
+	}
+	if (kept != NULL) {
+		*kept = scene;
+	} else {
+		collide_scene_destroy(&scene);
+	}
+	return totals;
+}
+
+static void expect_clean(const scene_totals *t, const char *name)
+{
+	cr_expect_eq(t->worst_crossings, 0, "%s: up to %d crossing triangle pairs in a frame (%d frames)", name,
+	             t->worst_crossings, t->crossing_frames);
+	cr_expect_eq(t->worst_inside, 0, "%s: up to %d vertices inside colliders in a frame", name,
+	             t->worst_inside);
+}
+
+Test(collide, two_sheets_dropped_on_a_sphere_never_cross_and_keep_their_order)
+{
+	collide_scene scene;
+	scene_totals t = run_scene(SCENE_DRAPE, 16, 0, &scene);
+	expect_clean(&t, "drape");
+	/* The upper sheet has come down onto the lower one over the sphere's cap. */
+	cr_expect_eq(collide_scene_order_violations(&scene), 0, "upper sheet found beneath the lower one");
+	collide_scene_destroy(&scene);
+}
+
+Test(collide, a_sheet_thrown_at_20_m_per_s_onto_a_1_mm_box_does_not_pass_through)
+{
+	scene_totals t = run_scene(SCENE_THIN_BOX, 16, 0, NULL);
+	expect_clean(&t, "thin-box");
+	/* So fast a throw needs the continuous tests: they must have fired. */
+	cr_expect_gt(t.ccd_hits, 0);
+}
+
+Test(collide, four_sheets_fall_into_a_pile_in_their_order)
+{
+	collide_scene scene;
+	scene_totals t = run_scene(SCENE_PILE, 16, 0, &scene);
+	expect_clean(&t, "pile");
+	cr_expect_eq(collide_scene_order_violations(&scene), 0,
+	             "a sheet of the pile is beneath one that fell below it");
+	collide_scene_destroy(&scene);
+}
+
+Test(collide, a_sheet_on_a_spinning_sphere_twists_for_ten_seconds_without_crossing)
+{
+	collide_scene scene;
+	scene_totals t = run_scene(SCENE_TWIST, 16, 0, &scene);
+	expect_clean(&t, "twist");
+	/* The spin must have carried the cloth round (friction), or nothing was tested. */
+	int nv = plait_object_get_vertex_count(scene.cloths[0]);
+	plait_vec3 *x = malloc(sizeof *x * (size_t)nv);
+	plait_object_get_positions(scene.cloths[0], 0, nv, x, NULL);
+	double turned = 0.0;
+	for (int i = 0; i < nv; ++i) {
+		turned += (double)x[i].x; /* corner vertex 0 started at x = -0.8 */
+	}
+	(void)turned;
+	cr_expect_gt(fabs(atan2(x[0].z, x[0].x) - atan2(-0.8, -0.8)), 0.3,
+	             "the spinning sphere did not turn the cloth");
+	free(x);
+	collide_scene_destroy(&scene);
+}
+
+Test(collide, a_tube_over_a_bending_arm_never_crosses_itself_or_the_arm)
+{
+	scene_totals t = run_scene(SCENE_ARM, 16, 0, NULL);
+	expect_clean(&t, "arm");
+}
+
+Test(collide, hang_over_a_sphere_mesh_with_self_collision)
+{
+	scene_totals t = run_scene(SCENE_HANG_SELF, 24, 200, NULL);
+	expect_clean(&t, "hang-self");
+}
+
+/* ---- Parts ------------------------------------------------------------------------------- */
+
+static plait_object_id sheet(plait_world_id world, int n, float size, plait_vec3 at, plait_vec3 velocity,
+                             float thickness, int layer)
+{
+	test_grid grid = test_grid_make(n, n, size, size);
+	plait_vec3 *v = malloc(sizeof *v * (size_t)grid.vertex_count);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].x += at.x;
+		grid.positions[i].y += at.y;
+		grid.positions[i].z += at.z;
+		v[i] = velocity;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.velocities = v;
+	def.surface.thickness = thickness;
+	def.surface.collision_layer = layer;
+	def.surface.friction = 0.0f;
+	def.self_collide = true; /* the checker counts a cloth crossing itself too */
+	plait_error error;
+	plait_object_id id = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(id), "%s", error.message);
+	free(v);
+	test_grid_free(&grid);
+	return id;
+}
+
+static float mean_y(plait_object_id cloth)
+{
+	int n = plait_object_get_vertex_count(cloth);
+	plait_vec3 *x = malloc(sizeof *x * (size_t)n);
+	plait_object_get_positions(cloth, 0, n, x, NULL);
+	double sum = 0.0;
+	for (int i = 0; i < n; ++i) {
+		sum += (double)x[i].y;
+	}
+	free(x);
+	return (float)(sum / n);
+}
+
+static plait_world_id weightless_world(void)
+{
+	plait_world_def def = plait_default_world_def();
+	def.gravity = (plait_vec3){0.0f, 0.0f, 0.0f};
+	def.air_density = 0.0f;
+	def.fps = 60.0f;
+	return plait_create_world(&def, NULL);
+}
+
+Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
+{
+	/* Zero thickness, one substep and one collision iteration per frame: 1.7 m of travel per
+	 * substep, through a target held at its corners. Only the continuous tests and the failsafe
+	 * stand between the sheets. The target is shifted so that no vertices line up. */
+	plait_world_def def = plait_default_world_def();
+	def.gravity = (plait_vec3){0.0f, 0.0f, 0.0f};
+	def.air_density = 0.0f;
+	def.fps = 60.0f;
+	def.substeps = 1;
+	def.max_collision_iterations = 1;
+	plait_world_id world = plait_create_world(&def, NULL);
+	test_grid grid = test_grid_make(8, 8, 1.0f, 1.0f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].x += 0.01f;
+		grid.positions[i].z += 0.02f;
+	}
+	plait_cloth_def def_target = plait_default_cloth_def();
+	def_target.mesh = test_grid_mesh(&grid);
+	def_target.surface.thickness = 0.0f;
+	def_target.self_collide = true;
+	int corners[4] = {0, 8, 72, 80};
+	def_target.pins = corners;
+	def_target.pin_count = 4;
+	plait_object_id target = plait_create_cloth(world, &def_target, NULL);
+	test_grid_free(&grid);
+	plait_object_id bullet =
+	    sheet(world, 4, 0.3f, (plait_vec3){0.0f, 1.0f, 0.0f}, (plait_vec3){0, -100, 0}, 0.0f, 0);
+	int ccd_hits = 0;
+	for (int f = 0; f < 30; ++f) {
+		cr_assert(test_step_frames(world, 1));
+		ccd_hits += plait_world_get_stats(world).ccd_hits;
+		plait_intersection_report report;
+		plait_world_check_intersections(world, &report, NULL);
+		cr_assert_eq(report.triangle_pairs, 0, "frame %d: %d crossing triangle pairs", f + 1,
+		             report.triangle_pairs);
+	}
+	cr_expect_gt(ccd_hits, 0, "the continuous tests never fired");
+	/* Caught: the bullet's centre is above the target's, and the target was pushed down. */
+	plait_vec3 bullet_centre, target_centre;
+	plait_object_get_positions(bullet, 12, 1, &bullet_centre, NULL);
+	plait_object_get_positions(target, 40, 1, &target_centre, NULL);
+	cr_expect_gt(bullet_centre.y, target_centre.y,
+	             "the bullet sheet went through: centre at %g, target's at %g", (double)bullet_centre.y,
+	             (double)target_centre.y);
+	cr_expect_lt(target_centre.y, -0.05f, "the target was not pushed (centre at %g)",
+	             (double)target_centre.y);
+	plait_destroy_world(world);
+}
+
+/* A sheet at rest and one moving into it at 1 m/s, weightless: who moves depends on layers. */
+static void push_between_layers(int resting_layer, int moving_layer, float *resting_moved, float *moving_end)
+{
+	plait_world_id world = weightless_world();
+	plait_object_id resting =
+	    sheet(world, 6, 1.0f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.01f, resting_layer);
+	plait_object_id moving =
+	    sheet(world, 6, 0.8f, (plait_vec3){0.03f, 0.1f, 0.02f}, (plait_vec3){0, -1, 0}, 0.01f, moving_layer);
+	cr_assert(test_step_frames(world, 30));
+	*resting_moved = -mean_y(resting);
+	*moving_end = mean_y(moving);
+	plait_destroy_world(world);
+}
+
+Test(collide, a_lower_collision_layer_pushes_without_being_pushed)
+{
+	float moved, end;
+	push_between_layers(0, 0, &moved, &end);
+	cr_expect_gt(moved, 0.05f, "on one layer the resting sheet should be pushed (moved %g)", (double)moved);
+	push_between_layers(0, 1, &moved, &end);
+	cr_expect_lt(fabsf(moved), 1e-4f, "on a lower layer the resting sheet must not move (moved %g)",
+	             (double)moved);
+	cr_expect_gt(end, 0.015f, "the upper layer's sheet must stop on it (at %g)", (double)end);
+	push_between_layers(1, 0, &moved, &end);
+	cr_expect_gt(moved, 0.05f, "a sheet on a higher layer is pushed by a lower one (moved %g)",
+	             (double)moved);
+}
+
+Test(collide, sheets_that_start_closer_than_their_thickness_do_not_explode)
+{
+	/* 2 mm apart with 10 mm of thickness each: the contact distance is clipped to the start
+	 * separation (seed 000 §4.5), so they neither fly apart nor cross. */
+	plait_world_def def = plait_default_world_def();
+	def.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&def, NULL);
+	plait_collider_def ground = plait_default_collider_def();
+	ground.point = (plait_vec3){0.0f, -0.5f, 0.0f};
+	plait_create_collider(world, &ground, NULL);
+	plait_object_id a = sheet(world, 10, 1.0f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.01f, 0);
+	plait_object_id b =
+	    sheet(world, 10, 1.0f, (plait_vec3){0.013f, 0.002f, 0.017f}, (plait_vec3){0, 0, 0}, 0.01f, 0);
+	for (int f = 0; f < 24; ++f) {
+		cr_assert(test_step_frames(world, 1));
+		plait_frame_stats stats = plait_world_get_stats(world);
+		/* Free fall of 1 s gives 0.5 J per kg; an explosion gives far more. */
+		cr_assert_lt(stats.kinetic_energy, 5.0, "frame %d: kinetic energy %g J", f + 1, stats.kinetic_energy);
+		plait_intersection_report report;
+		plait_world_check_intersections(world, &report, NULL);
+		cr_assert_eq(report.triangle_pairs, 0, "frame %d: %d crossing pairs", f + 1, report.triangle_pairs);
+	}
+	cr_expect_gt(mean_y(b), mean_y(a), "the upper sheet ended below the lower one");
+	plait_destroy_world(world);
+}
+
+/* A small sheet on a plane tilted by `degrees` about z, both with friction mu. Returns how far
+ * the sheet's centre moved along the slope in 2 s. */
+static float slide_on_tilted_plane(float degrees, float mu)
+{
+	plait_world_def def = plait_default_world_def();
+	def.air_density = 0.0f;
+	def.fps = 60.0f;
+	plait_world_id world = plait_create_world(&def, NULL);
+	float angle = degrees * 3.14159265f / 180.0f;
+	plait_collider_def plane = plait_default_collider_def();
+	plane.normal = (plait_vec3){-sinf(angle), cosf(angle), 0.0f};
+	plane.surface.friction = mu;
+	plait_create_collider(world, &plane, NULL);
+	test_grid grid = test_grid_make(6, 6, 0.3f, 0.3f);
+	plait_vec3 tangent = {cosf(angle), sinf(angle), 0.0f};
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		plait_vec3 p = grid.positions[i];
+		/* Laid in the plane, a thickness above it. */
+		grid.positions[i] = (plait_vec3){p.x * tangent.x + 0.0101f * plane.normal.x,
+		                                 p.x * tangent.y + 0.0101f * plane.normal.y, p.z};
+	}
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.surface.friction = mu;
+	cloth.surface.thickness = 0.01f;
+	plait_object_id id = plait_create_cloth(world, &cloth, NULL);
+	int centre = grid.vertex_count / 2;
+	plait_vec3 before = grid.positions[centre], after;
+	cr_assert(test_step_frames(world, 120));
+	plait_object_get_positions(id, centre, 1, &after, NULL);
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+	return -((after.x - before.x) * tangent.x + (after.y - before.y) * tangent.y);
+}
+
+Test(collide, cloth_on_a_tilted_plane_sticks_when_tan_theta_is_below_mu_and_slides_otherwise)
+{
+	float moved = slide_on_tilted_plane(20.0f, 0.5f); /* tan 20 = 0.36 < 0.5 */
+	cr_expect_lt(fabsf(moved), 0.01f, "stuck at 20 degrees with mu 0.5, but moved %g m", (double)moved);
+	moved = slide_on_tilted_plane(30.0f, 0.6f); /* tan 30 = 0.577 < 0.6 */
+	cr_expect_lt(fabsf(moved), 0.02f, "stuck at 30 degrees with mu 0.6, but moved %g m", (double)moved);
+	/* Sliding: a = g (sin - mu cos), 2 s: d = a t^2 / 2. */
+	float cases[2][2] = {{35.0f, 0.5f}, {45.0f, 0.3f}};
+	for (int k = 0; k < 2; ++k) {
+		float theta = cases[k][0] * 3.14159265f / 180.0f, mu = cases[k][1];
+		float expected = 0.5f * 9.81f * (sinf(theta) - mu * cosf(theta)) * 4.0f;
+		moved = slide_on_tilted_plane(cases[k][0], mu);
+		cr_expect(moved > 0.7f * expected && moved < 1.3f * expected,
+		          "at %g degrees with mu %g it slid %g m, Coulomb says %g m", (double)cases[k][0], (double)mu,
+		          (double)moved, (double)expected);
+	}
+}
