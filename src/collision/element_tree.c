@@ -117,9 +117,11 @@ void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const
 	}
 }
 
-static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub)
+/* Whether two boxes come within `margin` of each other. */
+static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
 {
-	return la.x <= ub.x && lb.x <= ua.x && la.y <= ub.y && lb.y <= ua.y && la.z <= ub.z && lb.z <= ua.z;
+	return la.x <= ub.x + margin && lb.x <= ua.x + margin && la.y <= ub.y + margin && lb.y <= ua.y + margin &&
+	       la.z <= ub.z + margin && lb.z <= ua.z + margin;
 }
 
 /* Median splits halve the element count at every level, so no tree is deeper than 32 levels;
@@ -128,15 +130,15 @@ static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub)
 
 static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *a, const vec3 *lower_a,
                        const vec3 *upper_a, const plait_element_tree *tree_b, const plait_tree_node *b,
-                       const vec3 *lower_b, const vec3 *upper_b, plait_element_pair_visitor *visit,
-                       void *context)
+                       const vec3 *lower_b, const vec3 *upper_b, float margin,
+                       plait_element_pair_visitor *visit, void *context)
 {
 	bool same = a == b;
 	for (int i = a->first; i < a->first + a->count; ++i) {
 		int ei = tree_a->order[i];
 		for (int j = same ? i + 1 : b->first; j < b->first + b->count; ++j) {
 			int ej = tree_b->order[j];
-			if (boxes_overlap(lower_a[ei], upper_a[ei], lower_b[ej], upper_b[ej])) {
+			if (boxes_overlap(lower_a[ei], upper_a[ei], lower_b[ej], upper_b[ej], margin)) {
 				visit(ei, ej, context);
 			}
 		}
@@ -146,7 +148,7 @@ static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *
 /* The traversal for both queries: `self` when the two trees are one. */
 static void traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
                      const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
-                     plait_element_pair_visitor *visit, void *context)
+                     float margin, plait_element_pair_visitor *visit, void *context)
 {
 	if (tree_a->node_count == 0 || tree_b->node_count == 0) {
 		return;
@@ -159,11 +161,11 @@ static void traverse(const plait_element_tree *tree_a, const vec3 *lower_a, cons
 		int nb = stack[--top], na = stack[--top];
 		const plait_tree_node *a = &tree_a->nodes[na], *b = &tree_b->nodes[nb];
 		bool same = self && na == nb;
-		if (!same && !boxes_overlap(a->lower, a->upper, b->lower, b->upper)) {
+		if (!same && !boxes_overlap(a->lower, a->upper, b->lower, b->upper, margin)) {
 			continue;
 		}
 		if (a->count > 0 && b->count > 0) {
-			leaf_pairs(tree_a, a, lower_a, upper_a, tree_b, b, lower_b, upper_b, visit, context);
+			leaf_pairs(tree_a, a, lower_a, upper_a, tree_b, b, lower_b, upper_b, margin, visit, context);
 			continue;
 		}
 		/* Pairs pushed in reverse so they pop in a fixed, natural order. */
@@ -192,13 +194,13 @@ static void traverse(const plait_element_tree *tree_a, const vec3 *lower_a, cons
 void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                               plait_element_pair_visitor *visit, void *context)
 {
-	traverse(tree, lower, upper, tree, lower, upper, true, visit, context);
+	traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, visit, context);
 }
 
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
                                       const vec3 *upper_a, const plait_element_tree *tree_b,
-                                      const vec3 *lower_b, const vec3 *upper_b,
+                                      const vec3 *lower_b, const vec3 *upper_b, float margin,
                                       plait_element_pair_visitor *visit, void *context)
 {
-	traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, visit, context);
+	traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, visit, context);
 }

@@ -41,10 +41,11 @@ void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower,
                               plait_element_pair_visitor *visit, void *context);
 
 /* As above between two trees: visit(a, b) with a an element of tree_a, b one of tree_b (each
- * in its own tree's numbering, boxes from its own arrays). */
+ * in its own tree's numbering, boxes from its own arrays), for boxes within `margin` of each
+ * other. */
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
                                       const vec3 *upper_a, const plait_element_tree *tree_b,
-                                      const vec3 *lower_b, const vec3 *upper_b,
+                                      const vec3 *lower_b, const vec3 *upper_b, float margin,
                                       plait_element_pair_visitor *visit, void *context);
 
 #endif

@@ -889,7 +889,7 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 		if (!paths) {
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
-			g += LIST_SCALE * reach + guard + 0.5f * mc->allowance_max + FAILSAFE_DISTANCE;
+			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
 		}
 		mc->lower[e] = v3_sub(lower, v3(g, g, g));
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
@@ -934,8 +934,10 @@ static void traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
 				continue; /* particle pairs (contact.c) */
 			}
 			object_pass between = {pass, oa->first, ob->first};
+			/* At the listing, two objects' boxes also reach across their allowance. */
+			float margin = pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : 0.0f;
 			plait_element_tree_pairs_between(&oa->tree, la, ua, &ob->tree, mc->lower + ob->first,
-			                                 mc->upper + ob->first, visit_object_elements, &between);
+			                                 mc->upper + ob->first, margin, visit_object_elements, &between);
 		}
 	}
 }
@@ -1010,7 +1012,7 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->excluded_list =
 	    plait_alloc_zero(a, (size_t)(pass.excluded_count > 0 ? pass.excluded_count : 1), sizeof(int));
 	bool ok = !pass.failed && mc->excluded_start != NULL && mc->excluded_list != NULL;
-	if (ok) {
+	if (ok && pass.excluded_count > 0) {
 		qsort(pass.excluded, (size_t)pass.excluded_count, sizeof *pass.excluded, compare_int_pairs);
 		for (int k = 0; k < pass.excluded_count; ++k) {
 			mc->excluded_start[pass.excluded[k][0] + 1] += 1;

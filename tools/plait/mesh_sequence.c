@@ -183,7 +183,8 @@ static bool plait_find_frames(const plait_frame_pattern *pattern, int **frames, 
 		*count = 0;
 		return false;
 	}
-	qsort(*frames, (size_t)*count, sizeof(int), plait_compare_frames);
+	if (*count > 0)
+		qsort(*frames, (size_t)*count, sizeof(int), plait_compare_frames);
 	return true;
 }
 
