@@ -55,8 +55,8 @@ typedef struct contact_pair {
 typedef struct plait_mesh_contacts {
 	int element_count;
 	element *elements;
-	float *element_reach; /* how far an element's contacts reach beyond it: its largest radius,
-	                       * scaled for self-collision */
+	float *element_reach; /* an element's largest radius (at the last listing) */
+	float *element_guard; /* an element's largest guard (at the last listing) */
 	vec3 *lower, *upper;  /* element boxes */
 	int object_count;
 	collision_object *objects;
@@ -119,6 +119,8 @@ static void free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
 {
 	plait_free(a, mc->elements);
 	plait_free(a, mc->element_reach);
+	plait_free(a, mc->element_guard);
+	mc->element_guard = NULL;
 	plait_free(a, mc->lower);
 	plait_free(a, mc->upper);
 	for (int k = 0; k < mc->object_count; ++k) {
@@ -198,14 +200,15 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	int count = triangles + points;
 	mc->elements = plait_alloc_zero(a, (size_t)count, sizeof *mc->elements);
 	mc->element_reach = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->element_guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	edge_key *edges = plait_alloc_zero(a, (size_t)triangles * 3, sizeof *edges);
 	bool *owned = plait_alloc_zero(a, (size_t)p->count, sizeof(bool));
 	/* At most one object per surface and one per particle run. */
 	mc->objects = plait_alloc_zero(a, (size_t)(sim->surface_count + points), sizeof *mc->objects);
-	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->lower != NULL && mc->upper != NULL &&
-	          edges != NULL && owned != NULL && mc->objects != NULL;
+	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
+	          mc->lower != NULL && mc->upper != NULL && edges != NULL && owned != NULL && mc->objects != NULL;
 	if (ok) {
 		int e = 0, edge_count = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {
@@ -503,6 +506,7 @@ typedef struct pair_pass {
 	stage stage;
 	float failsafe_distance;
 	int hits;
+	float list_distance; /* STAGE_GATHER: of the element pair being visited */
 	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
 	 * (or shares a vertex); the element pairs that are, for the exclusion lists. */
 	bool all_rest;
@@ -666,11 +670,11 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	plait_mesh_contacts *mc = pass->mc;
 	plait_particles *p = &sim->particles;
 	int first_count = type == PAIR_EDGE_EDGE ? 2 : 1;
-	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
-	if (self) {
-		distance *= first->self_width_scale;
-	}
 	if (pass->stage == STAGE_REST) {
+		float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+		if (self) {
+			distance *= first->self_width_scale;
+		}
 		vec3 initial[4] = {{0}};
 		gather_points(p->x_start, v, n, initial);
 		float rest = primitive_distance(type, initial);
@@ -695,18 +699,7 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		}
 		return;
 	}
-	float guards = 0.0f;
-	for (int side = 0; side < 2; ++side) {
-		float largest = 0.0f;
-		for (int k = side == 0 ? 0 : first_count; k < (side == 0 ? first_count : n); ++k) {
-			largest = plait_maxf(largest, mc->guard[v[k]]);
-		}
-		guards += largest;
-	}
-	if (!self) {
-		guards += mc->allowance[mc->object_of[v[0]] * mc->object_count + mc->object_of[v[n - 1]]];
-	}
-	float list_distance = LIST_SCALE * distance + guards + 2.0f * FAILSAFE_DISTANCE;
+	float list_distance = pass->list_distance;
 	vec3 start[4] = {{0}}, end[4] = {{0}};
 	gather_current(p->point, v, n, end);
 	/* Boxes first: most pairs of neighbouring elements are rejected without a distance. */
@@ -725,6 +718,10 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance ||
 	    primitive_distance(type, end) > list_distance) {
 		return;
+	}
+	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+	if (self) {
+		distance *= first->self_width_scale;
 	}
 	if (self && distance > 0.0f) {
 		/* A rest pair: the failsafe watches it (mc->rest_pairs); no contact. */
@@ -794,6 +791,17 @@ static void visit_elements(int a, int b, void *context)
 	}
 	bool failsafe = pass->stage == STAGE_FAILSAFE;
 	pass->all_rest = true;
+	if (pass->stage == STAGE_GATHER) {
+		/* One list distance for every primitive pair of the two elements, from their largest
+		 * radii and guards: a little generous, and no lookups per primitive pair. */
+		float scale = self ? ma->self_width_scale : 1.0f;
+		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
+		                      mc->element_guard[a] + mc->element_guard[b] + 2.0f * FAILSAFE_DISTANCE;
+		if (!self) {
+			pass->list_distance +=
+			    mc->allowance[mc->object_of[ea->v[0]] * mc->object_count + mc->object_of[eb->v[0]]];
+		}
+	}
 	int v[4];
 	for (int turn = 0; turn < 2; ++turn) {
 		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
@@ -890,6 +898,8 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
 			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
+			mc->element_reach[e] = radius;
+			mc->element_guard[e] = guard;
 		}
 		mc->lower[e] = v3_sub(lower, v3(g, g, g));
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
@@ -983,7 +993,7 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
 	const plait_particles *p = &sim->particles;
-	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, false, 0, 0, NULL, false};
 	for (int k = 0; k < mc->object_count && !pass.failed; ++k) {
 		collision_object *o = &mc->objects[k];
 		if (!o->self) {
@@ -1056,7 +1066,7 @@ static void gather(plait_sim *sim, plait_mesh_contacts *mc)
 		}
 	}
 	fit_boxes(sim, mc, false, 0.0f);
-	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, false, 0, 0, NULL, false};
 	traverse_objects(mc, &pass);
 	mc->list_valid = !mc->out_of_memory;
 }
@@ -1445,7 +1455,7 @@ static void forget_rest_bounds(plait_mesh_contacts *mc)
 
 static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
 {
-	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, false, 0, 0, NULL, false};
 	sweep_rest_pairs(&pass);
 	if (from_list) {
 		for (int k = 0; k < mc->pair_count; ++k) {
