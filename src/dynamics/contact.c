@@ -282,8 +282,22 @@ static void visit_proximity(int t, void *context)
  * contact. Every candidate triangle is visited, however many the path overlaps. Returns true
  * when the particle was moved; *p1 is updated in shape space and *surface_motion receives how
  * far the touched surface point moved over the substep (zero for a rigid mesh). */
+static void note_triangle(int t, void *context)
+{
+	(void)t;
+	*(bool *)context = true;
+}
+
+/* Whether any triangle's box of the mesh overlaps [lower, upper]. */
+static bool any_triangle_near(const plait_mesh_shape *mesh, vec3 lower, vec3 upper)
+{
+	bool found = false;
+	plait_mesh_shape_visit(mesh, lower, upper, true, note_triangle, &found);
+	return found;
+}
+
 static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 *p1, float radius,
-                                    float friction, vec3 *contact_normal, vec3 *surface_motion)
+                                    float friction, bool thorough, vec3 *contact_normal, vec3 *surface_motion)
 {
 	vec3 grow = {radius, radius, radius};
 	vec3 lower = v3_sub(v3_min(p0, *p1), grow), upper = v3_add(v3_max(p0, *p1), grow);
@@ -327,7 +341,10 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 			}
 		}
 	}
-	if (mesh->closed) {
+	/* A particle with no triangle within its radius is not touching; it could only be deep
+	 * inside, which a thorough pass (the first substep of each frame) looks for. */
+	bool near = pass.moved || any_triangle_near(mesh, v3_sub(pass.p1, grow), v3_add(pass.p1, grow));
+	if (mesh->closed && (near || thorough)) {
 		/* Trapped check (seed 000 §4.4): whatever side the particle came from, it must end
 		 * outside a closed mesh, by the radius. The signed distance settles inside and
 		 * outside near edges and corners too. */
@@ -336,7 +353,7 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 		if (outside < radius) {
 			push_out(&pass, v3_scale(normal, mesh->outward), radius - outside, v3(0.0f, 0.0f, 0.0f));
 		}
-	} else {
+	} else if (!mesh->closed) {
 		plait_mesh_shape_visit(mesh, lower, upper, true, visit_proximity, &pass);
 	}
 	if (!pass.moved) {
@@ -396,7 +413,8 @@ static void collide_collider_range(void *context, int begin, int end)
 		if (c->shape.type == PLAIT_SHAPE_MESH) {
 			vec3 normal, motion;
 			float friction = combined_friction(mat->friction, c->friction);
-			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, &normal, &motion)) {
+			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, sim->substep == 0, &normal,
+			                            &motion)) {
 				/* Where the touched surface point was at the substep's start, to where it is. */
 				vec3 surface_velocity = v3_scale(
 				    v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, v3_sub(p1, motion))), inverse_h);
@@ -746,14 +764,19 @@ int plait_count_penetrations(const plait_sim *sim)
 			continue;
 		}
 		plait_rigid r = plait_rigid_from_transform(c->transform_end);
+		vec3 lower, upper;
+		bool bounded = plait_shape_bounds(&c->shape, &lower, &upper);
 		for (int i = 0; i < p->count; ++i) {
 			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE)) {
 				continue;
 			}
+			vec3 q = plait_rigid_apply_inverse(&r, p->point[i].x);
+			if (bounded && (q.x < lower.x || q.y < lower.y || q.z < lower.z || q.x > upper.x ||
+			                q.y > upper.y || q.z > upper.z)) {
+				continue; /* outside the shape's box: not inside the shape */
+			}
 			vec3 normal;
-			float distance =
-			    plait_shape_distance(&c->shape, plait_rigid_apply_inverse(&r, p->point[i].x), &normal) *
-			    r.scale;
+			float distance = plait_shape_distance(&c->shape, q, &normal) * r.scale;
 			if (distance < -(1e-4f + 0.01f * p->radius[i])) {
 				++count;
 			}

@@ -337,7 +337,7 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 plait_result collide_scene_step(collide_scene *scene, plait_error *error)
 {
-	int frame = plait_world_get_stats(scene->world).frame + 1; /* the frame being made */
+	int frame = ++scene->frame; /* the frame being made */
 	float t = (float)frame / scene->fps;
 	if (scene->kind == SCENE_TWIST) {
 		/* Still for a second while the cloth settles, then half a turn per second. */

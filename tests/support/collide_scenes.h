@@ -28,6 +28,7 @@ typedef struct collide_scene {
 	int cloth_count;
 	plait_object_id animated; /* the spinning sphere or the forearm */
 	int frames;               /* the scene's natural length */
+	int frame;                /* frames stepped so far */
 	float fps;
 } collide_scene;
 
