@@ -324,3 +324,125 @@ Test(collide, cloth_on_a_tilted_plane_sticks_when_tan_theta_is_below_mu_and_slid
 		          (double)moved, (double)expected);
 	}
 }
+
+/* ---- Curves: segments ------------------------------------------------------------------- */
+
+static plait_object_id rope(plait_world_id world, const plait_vec3 *x, int n, plait_vec3 velocity,
+                            const int *pins, int pin_count, bool self_collide)
+{
+	plait_vec3 *v = malloc(sizeof *v * (size_t)n);
+	for (int i = 0; i < n; ++i) {
+		v[i] = velocity;
+	}
+	plait_curve_def def = plait_default_curve_def();
+	def.positions = x;
+	def.vertex_count = n;
+	def.velocities = v;
+	def.mass = 0.05f;
+	def.pins = pins;
+	def.pin_count = pin_count;
+	def.self_collide = self_collide;
+	def.surface.thickness = 0.01f;
+	def.stretch_resistance = 1000.0f;
+	plait_error error;
+	plait_object_id id = plait_create_curve(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(id), "%s", error.message);
+	free(v);
+	return id;
+}
+
+Test(collide, a_rope_segment_longer_than_a_sheet_stays_on_it)
+{
+	/* One segment, 3 m long, across a 1 m sheet held at its corners: its two vertices never
+	 * touch the sheet, so only edge-edge contacts keep it from falling through. */
+	plait_world_def def = plait_default_world_def();
+	def.air_density = 0.0f;
+	def.fps = 60.0f;
+	plait_world_id world = plait_create_world(&def, NULL);
+	test_grid grid = test_grid_make(4, 4, 1.0f, 1.0f);
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.surface.thickness = 0.01f;
+	int corners[4] = {0, 4, 20, 24};
+	cloth.pins = corners;
+	cloth.pin_count = 4;
+	plait_object_id sheet_id = plait_create_cloth(world, &cloth, NULL);
+	test_grid_free(&grid);
+	plait_vec3 x[2] = {{-1.5f, 0.3f, 0.05f}, {1.5f, 0.3f, -0.05f}};
+	plait_object_id line = rope(world, x, 2, (plait_vec3){0.0f, -3.0f, 0.0f}, NULL, 0, false);
+	cr_assert(test_step_frames(world, 60));
+	plait_vec3 centre, ends[2];
+	plait_object_get_positions(sheet_id, 12, 1, &centre, NULL);
+	plait_object_get_positions(line, 0, 2, ends, NULL);
+	float rope_at_centre = 0.5f * (ends[0].y + ends[1].y);
+	cr_expect_gt(rope_at_centre, centre.y, "the rope (at %g over the centre) went through the sheet (at %g)",
+	             (double)rope_at_centre, (double)centre.y);
+	cr_expect_lt(centre.y, -0.01f, "the rope does not weigh on the sheet (centre at %g)", (double)centre.y);
+	plait_destroy_world(world);
+}
+
+Test(collide, a_particle_rests_on_a_rope_between_its_vertices)
+{
+	plait_world_def def = plait_default_world_def();
+	def.air_density = 0.0f;
+	def.fps = 60.0f;
+	plait_world_id world = plait_create_world(&def, NULL);
+	plait_vec3 x[2] = {{-1.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}};
+	int pins[2] = {0, 1};
+	rope(world, x, 2, (plait_vec3){0, 0, 0}, pins, 2, false);
+	plait_vec3 drop = {0.1f, 0.5f, 0.0f};
+	plait_particles_def particles = plait_default_particles_def();
+	particles.positions = &drop;
+	particles.count = 1;
+	particles.radius = 0.02f;
+	plait_object_id dot = plait_create_particles(world, &particles, NULL);
+	cr_assert(test_step_frames(world, 60));
+	plait_object_get_positions(dot, 0, 1, &drop, NULL);
+	/* On the rope: its radius plus the rope's thickness above the line (it may roll off the
+	 * side later, but not fall through). */
+	cr_expect(drop.y > 0.0f || fabsf(drop.z) > 0.02f, "the particle fell through the rope: at (%g, %g, %g)",
+	          (double)drop.x, (double)drop.y, (double)drop.z);
+	plait_destroy_world(world);
+}
+
+Test(collide, a_self_colliding_rope_does_not_pass_through_itself)
+{
+	/* A U of rope lying flat, weightless, its arms 6 cm apart; one arm is thrown at the other
+	 * at 5 m/s. Segments closer than twice the thickness at the start are neighbours and left
+	 * alone; the arms are not. */
+	plait_world_def def = plait_default_world_def();
+	def.gravity = (plait_vec3){0.0f, 0.0f, 0.0f};
+	def.air_density = 0.0f;
+	def.fps = 60.0f;
+	plait_world_id world = plait_create_world(&def, NULL);
+	enum { N = 21 };
+	plait_vec3 x[N], v[N];
+	for (int i = 0; i < N; ++i) {
+		/* Arm A along x at z = 0 (vertices 0..9), a bend, arm B back along x at z = 0.06. */
+		if (i < 10) {
+			x[i] = (plait_vec3){-0.5f + 0.1f * (float)i, 0.0f, 0.0f};
+			v[i] = (plait_vec3){0.0f, 0.0f, 0.0f};
+		} else if (i == 10) {
+			x[i] = (plait_vec3){0.45f, 0.0f, 0.03f};
+			v[i] = (plait_vec3){0.0f, 0.0f, 0.0f};
+		} else {
+			x[i] = (plait_vec3){0.4f - 0.1f * (float)(i - 11), 0.0f, 0.06f};
+			v[i] = (plait_vec3){0.0f, 0.0f, -5.0f};
+		}
+	}
+	plait_curve_def def_rope = plait_default_curve_def();
+	def_rope.positions = x;
+	def_rope.vertex_count = N;
+	def_rope.velocities = v;
+	def_rope.self_collide = true;
+	def_rope.surface.thickness = 0.01f;
+	plait_error error;
+	plait_object_id id = plait_create_curve(world, &def_rope, &error);
+	cr_assert(!plait_object_id_is_null(id), "%s", error.message);
+	cr_assert(test_step_frames(world, 20));
+	plait_object_get_positions(id, 0, N, x, NULL);
+	/* Arm B's middle stays on its side (larger z) of arm A's middle. */
+	cr_expect_gt(x[15].z, x[4].z, "arm B (z = %g) passed through arm A (z = %g)", (double)x[15].z,
+	             (double)x[4].z);
+	plait_destroy_world(world);
+}

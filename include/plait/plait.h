@@ -276,6 +276,7 @@ typedef struct plait_curve_def {
 	float drag;                   /* linear air drag per vertex, >= 0 (0) */
 	float damp;                   /* 1/s (0) */
 	int iterations;               /* as for cloth (0) */
+	bool self_collide;            /* its segments collide with each other (false) */
 	plait_surface_def surface;
 	const int *pins;
 	int pin_count;
@@ -443,7 +444,8 @@ typedef struct plait_collider_shape {
 	plait_vec3 axes[3];       /* box: unit directions of its own x, y and z */
 } plait_collider_shape;
 
-plait_result plait_collider_get_shape(plait_object_id collider, plait_collider_shape *shape, plait_error *error);
+plait_result plait_collider_get_shape(plait_object_id collider, plait_collider_shape *shape,
+                                      plait_error *error);
 
 /* Whether the collider has an inside: spheres, capsules and boxes do, planes do not, and a mesh
  * does when every edge joins exactly two triangles. For a mesh this sorts its edges: ask once. */

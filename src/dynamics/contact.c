@@ -62,6 +62,9 @@ static bool materials_pair_up(const plait_material *a, const plait_material *b)
 	if (!a->collide || !b->collide || a->type == PLAIT_OBJECT_CLOTH || b->type == PLAIT_OBJECT_CLOTH) {
 		return false;
 	}
+	if (a->type == PLAIT_OBJECT_CURVE && b->type == PLAIT_OBJECT_CURVE) {
+		return false; /* curves meet through their segments (mesh_contact.c) */
+	}
 	if (a->object != b->object) {
 		return true;
 	}

@@ -180,7 +180,13 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			triangles += sim->surfaces[s].shape->triangle_count;
 		}
 	}
-	if (triangles == 0) {
+	int segments = 0;
+	for (int c = 0; c < sim->chain_count; ++c) {
+		if (material_collides(sim, sim->chains[c].material)) {
+			segments += sim->chains[c].count - 1;
+		}
+	}
+	if (triangles + segments == 0) {
 		return true; /* points alone meet as particle pairs (contact.c) */
 	}
 	bool *in_surface = plait_alloc_zero(a, (size_t)(p->count > 0 ? p->count : 1), sizeof(bool));
@@ -192,21 +198,27 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			in_surface[sim->surfaces[s].first + k] = true;
 		}
 	}
+	for (int c = 0; c < sim->chain_count; ++c) {
+		for (int k = 0; k < sim->chains[c].count; ++k) {
+			in_surface[sim->chains[c].first + k] = true;
+		}
+	}
 	int points = 0;
 	for (int i = 0; i < p->count; ++i) {
 		points += !in_surface[i] && (p->flags[i] & PLAIT_PARTICLE_COLLIDE) &&
 		          material_collides(sim, p->material[i]);
 	}
-	int count = triangles + points;
+	int count = triangles + segments + points;
 	mc->elements = plait_alloc_zero(a, (size_t)count, sizeof *mc->elements);
 	mc->element_reach = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
-	edge_key *edges = plait_alloc_zero(a, (size_t)triangles * 3, sizeof *edges);
+	edge_key *edges = plait_alloc_zero(a, (size_t)(triangles > 0 ? 3 * triangles : 1), sizeof *edges);
 	bool *owned = plait_alloc_zero(a, (size_t)p->count, sizeof(bool));
-	/* At most one object per surface and one per particle run. */
-	mc->objects = plait_alloc_zero(a, (size_t)(sim->surface_count + points), sizeof *mc->objects);
+	/* At most one object per surface, per chain and per particle run. */
+	mc->objects =
+	    plait_alloc_zero(a, (size_t)(sim->surface_count + sim->chain_count + points), sizeof *mc->objects);
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
 	          mc->lower != NULL && mc->upper != NULL && edges != NULL && owned != NULL && mc->objects != NULL;
 	if (ok) {
@@ -236,6 +248,26 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				}
 			}
 		}
+		/* Segments of curves: each owns its edge and its first vertex; the last segment also
+		 * its last vertex. */
+		for (int c = 0; c < sim->chain_count; ++c) {
+			const plait_chain *chain = &sim->chains[c];
+			if (!material_collides(sim, chain->material) || chain->count < 2) {
+				continue;
+			}
+			const plait_material *m = &sim->materials[chain->material];
+			mc->objects[mc->object_count++] =
+			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}};
+			for (int k = 0; k + 1 < chain->count; ++k, ++e) {
+				element *el = &mc->elements[e];
+				el->size = 2;
+				el->material = chain->material;
+				el->v[0] = chain->first + k;
+				el->v[1] = el->v[2] = chain->first + k + 1;
+				el->own_edges = 1;
+				el->own_vertices = (uint8_t)(k + 2 == chain->count ? 3 : 1);
+			}
+		}
 		for (int i = 0; i < p->count; ++i) {
 			if (!in_surface[i] && (p->flags[i] & PLAIT_PARTICLE_COLLIDE) &&
 			    material_collides(sim, p->material[i])) {
@@ -253,7 +285,9 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				el->own_vertices = 1;
 			}
 		}
-		qsort(edges, (size_t)edge_count, sizeof *edges, compare_edges);
+		if (edge_count > 0) {
+			qsort(edges, (size_t)edge_count, sizeof *edges, compare_edges);
+		}
 		for (int k = 0; k < edge_count; ++k) {
 			if (k == 0 || edges[k].low != edges[k - 1].low || edges[k].high != edges[k - 1].high) {
 				mc->elements[edges[k].element].own_edges |= (uint8_t)(1u << edges[k].k);

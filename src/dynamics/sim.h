@@ -187,6 +187,14 @@ typedef struct plait_surface {
 	struct plait_mesh_shape *shape;
 } plait_surface;
 
+/* A curve as other objects see it in collisions: the chain of segments from particle first to
+ * first + count - 1. */
+typedef struct plait_chain {
+	int object;
+	int material;
+	int first, count;
+} plait_chain;
+
 typedef struct plait_particle_contact {
 	int i, j;
 	vec3 normal;          /* from i to j */
@@ -231,6 +239,8 @@ typedef struct plait_sim {
 	plait_collider *colliders;
 	int surface_count, surface_capacity;
 	plait_surface *surfaces;
+	int chain_count, chain_capacity;
+	plait_chain *chains;
 	void *mesh_contacts;      /* plait_mesh_contacts, owned by mesh_contact.c */
 	bool mesh_contacts_dirty; /* objects came or went: rebuild the collision elements */
 	bool mesh_contacts_active;

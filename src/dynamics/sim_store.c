@@ -97,6 +97,7 @@ void plait_sim_destroy(plait_sim *sim)
 	plait_free(&sim->allocator, sim->materials);
 	plait_free(&sim->allocator, sim->colliders);
 	plait_free(&sim->allocator, sim->surfaces); /* their shapes are released by the world */
+	plait_free(&sim->allocator, sim->chains);
 	plait_free(&sim->allocator, sim->pair_contacts);
 	plait_free(&sim->allocator, sim->pair_list);
 	plait_free(&sim->allocator, sim->pair_lower);
@@ -429,5 +430,20 @@ bool plait_sim_reserve_surfaces(plait_sim *sim, int count)
 		return false;
 	}
 	sim->surface_capacity = capacity;
+	return true;
+}
+
+bool plait_sim_reserve_chains(plait_sim *sim, int count)
+{
+	int needed = sim->chain_count + count;
+	if (needed <= sim->chain_capacity) {
+		return true;
+	}
+	int capacity = next_capacity(sim->chain_capacity, needed);
+	if (!grow_array(&sim->allocator, (void **)&sim->chains, sizeof *sim->chains, sim->chain_count,
+	                capacity)) {
+		return false;
+	}
+	sim->chain_capacity = capacity;
 	return true;
 }

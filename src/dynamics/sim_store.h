@@ -31,4 +31,7 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep);
 /* Room for `count` more cloth surfaces. */
 bool plait_sim_reserve_surfaces(plait_sim *sim, int count);
 
+/* Room for `count` more curve chains. */
+bool plait_sim_reserve_chains(plait_sim *sim, int count);
+
 #endif

@@ -574,6 +574,12 @@ plait_object_id plait_create_curve(plait_world_id world_id, const plait_curve_de
 	}
 	int first = object->first_particle;
 	apply_pins(sim, first, def->pins, def->pin_count);
+	mat->self_collide = def->self_collide;
+	/* The chain of segments, for collisions with cloths and other curves. Without memory for
+	 * it the curve still collides through its vertices. */
+	if (def->surface.collide && n >= 2 && plait_sim_reserve_chains(sim, 1)) {
+		sim->chains[sim->chain_count++] = (plait_chain){id.index1 - 1, material, first, n};
+	}
 
 	const plait_vec3 *x = def->positions;
 	if (def->stretch_resistance > 0.0f || def->compression_resistance > 0.0f) {

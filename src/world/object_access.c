@@ -47,6 +47,17 @@ void plait_destroy_object(plait_object_id id)
 			}
 		}
 	}
+	/* A curve's chain goes with it; the others follow their particles. */
+	for (int k = 0; k < sim->chain_count;) {
+		plait_chain *chain = &sim->chains[k];
+		if (chain->object == id.index1 - 1) {
+			memmove(chain, chain + 1, sizeof *chain * (size_t)(sim->chain_count - k - 1));
+			sim->chain_count -= 1;
+			continue;
+		}
+		chain->first = world->objects[chain->object].first_particle;
+		++k;
+	}
 	/* The cloth's surface goes with it; the others keep pointing at their particles. */
 	for (int k = 0; k < sim->surface_count;) {
 		plait_surface *surface = &sim->surfaces[k];

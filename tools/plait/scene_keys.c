@@ -148,6 +148,7 @@ static const plait_scene_key plait_curve_keys[] = {
     PLAIT_FLOAT("drag", PLAIT_BETWEEN(0, 1e6), plait_curve_def, drag),
     PLAIT_FLOAT("damp", PLAIT_BETWEEN(0, 100), plait_curve_def, damp),
     PLAIT_INT("iterations", PLAIT_BETWEEN(0, 1000), plait_curve_def, iterations),
+    PLAIT_BOOL("self_collide", plait_curve_def, self_collide),
 };
 
 static const plait_scene_key plait_particles_keys[] = {
