@@ -541,6 +541,7 @@ typedef struct pair_pass {
 	float failsafe_distance;
 	int hits;
 	float list_distance; /* STAGE_GATHER: of the element pair being visited */
+	float pair_slack;    /* STAGE_GATHER: how far its primitives may come closer (guards, allowance) */
 	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
 	 * (or shares a vertex); the element pairs that are, for the exclusion lists. */
 	bool all_rest;
@@ -734,6 +735,7 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		return;
 	}
 	float list_distance = pass->list_distance;
+	float now = 0.0f;
 	vec3 start[4] = {{0}}, end[4] = {{0}};
 	gather_current(p->point, v, n, end);
 	/* Boxes first: most pairs of neighbouring elements are rejected without a distance. */
@@ -750,7 +752,7 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	if (lower_a.x - upper_b.x > list_distance || lower_b.x - upper_a.x > list_distance ||
 	    lower_a.y - upper_b.y > list_distance || lower_b.y - upper_a.y > list_distance ||
 	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance ||
-	    primitive_distance(type, end) > list_distance) {
+	    (now = primitive_distance(type, end)) > list_distance) {
 		return;
 	}
 	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
@@ -796,6 +798,10 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
 	}
 	start_side(&pair, start, end);
+	/* While the list covers, the pair's vertices stay within their guards (and its objects
+	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
+	 * bound). */
+	pair.lower = now - pass->pair_slack;
 	(void)add_pair(sim, mc, &pair);
 }
 
@@ -831,9 +837,12 @@ static void visit_elements(int a, int b, void *context)
 		float scale = self ? ma->self_width_scale : 1.0f;
 		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
 		                      mc->element_guard[a] + mc->element_guard[b] + 2.0f * FAILSAFE_DISTANCE;
+		pass->pair_slack = mc->element_guard[a] + mc->element_guard[b];
 		if (!self) {
-			pass->list_distance +=
+			float allowance =
 			    mc->allowance[mc->object_of[ea->v[0]] * mc->object_count + mc->object_of[eb->v[0]]];
+			pass->list_distance += allowance;
+			pass->pair_slack += allowance;
 		}
 	}
 	int v[4];
@@ -1027,7 +1036,7 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
 	const plait_particles *p = &sim->particles;
-	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
 	for (int k = 0; k < mc->object_count && !pass.failed; ++k) {
 		collision_object *o = &mc->objects[k];
 		if (!o->self) {
@@ -1100,7 +1109,7 @@ static void gather(plait_sim *sim, plait_mesh_contacts *mc)
 		}
 	}
 	fit_boxes(sim, mc, false, 0.0f);
-	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
 	traverse_objects(mc, &pass);
 	mc->list_valid = !mc->out_of_memory;
 }
@@ -1489,11 +1498,13 @@ static void forget_rest_bounds(plait_mesh_contacts *mc)
 
 static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
 {
-	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
 	sweep_rest_pairs(&pass);
 	if (from_list) {
 		for (int k = 0; k < mc->pair_count; ++k) {
-			sweep_pair(&pass, mc->pairs[k].type, mc->pairs[k].v);
+			if (mc->pairs[k].lower <= distance) {
+				sweep_pair(&pass, mc->pairs[k].type, mc->pairs[k].v);
+			}
 		}
 		return pass.hits;
 	}
