@@ -88,7 +88,9 @@ int main(void)
 		}
 	}
 
-	/* A rope thrown across both; its segments collide with the cloths and with itself. */
+	/* A rope thrown across both; its segments collide with the cloths and with itself. (On
+	 * layer 0 it would be below the outer cloth's layer: the outer cloth, pressed between it
+	 * and the inner one and pushed by both, could not give way.) */
 	enum { ROPE = 24 };
 	plait_vec3 rope_x[ROPE], rope_v[ROPE];
 	for (int i = 0; i < ROPE; ++i) {
@@ -103,6 +105,7 @@ int main(void)
 	rope.mass = 0.02f;
 	rope.self_collide = true;
 	rope.surface.thickness = 0.008f;
+	rope.surface.collision_layer = 2; /* on top of both: it pushes them, they do not push it */
 	if (plait_object_id_is_null(plait_create_curve(world, &rope, &error))) {
 		fprintf(stderr, "folded_cloths: %s\n", error.message);
 		return 1;

@@ -1167,9 +1167,12 @@ static bool respond(plait_sim *sim, const contact_pair *pair, const float *g, ve
 		int i = pair->v[k];
 		float scale = pair->scale[k < first_count ? 0 : 1];
 		w[k] = p->point[i].w * scale;
-		/* A vertex resting on a plane collider does not give way toward it (the plane would
-		 * push it back): this lets layers stack on the ground. */
-		bool held = (p->flags[i] & PLAIT_PARTICLE_SUPPORTED) && g[k] * v3_dot(n, p->contact_normal[i]) < 0.0f;
+		/* A vertex resting on a collider (a plane in the last substep, any collider in this one)
+		 * does not give way toward it: the collider would only push it back into whatever
+		 * pressed on it, and the two would cross. This lets layers stack on the ground and
+		 * keeps cloth squeezed against a moving collider (an elbow) out of it. */
+		bool on_collider = (p->flags[i] & (PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_CONTACT)) != 0;
+		bool held = on_collider && g[k] * v3_dot(n, p->contact_normal[i]) < 0.0f;
 		if (held) {
 			w[k] = -w[k]; /* marked; restored if every vertex is held */
 		}
