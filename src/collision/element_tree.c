@@ -1,5 +1,7 @@
 #include "collision/element_tree.h"
 
+#include "collision/axis_sort.h"
+
 #include <string.h>
 
 #define LEAF_SIZE 4
@@ -9,35 +11,6 @@ void plait_element_tree_destroy(plait_element_tree *tree, const plait_allocator 
 	plait_free(allocator, tree->nodes);
 	plait_free(allocator, tree->order);
 	memset(tree, 0, sizeof *tree);
-}
-
-static float axis_value(vec3 v, int axis)
-{
-	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
-}
-
-/* Stable bottom-up merge sort of order[0, count) by centre along axis (ties by index), so the
- * tree never depends on a library sort's tie-breaking. */
-static void sort_by_axis(int *order, int count, const vec3 *centre, int axis, int *scratch)
-{
-	for (int width = 1; width < count; width *= 2) {
-		for (int start = 0; start < count; start += 2 * width) {
-			int middle = start + width < count ? start + width : count;
-			int end = start + 2 * width < count ? start + 2 * width : count;
-			int i = start, j = middle, k = start;
-			while (i < middle && j < end) {
-				float a = axis_value(centre[order[i]], axis), b = axis_value(centre[order[j]], axis);
-				scratch[k++] = (b < a || (b == a && order[j] < order[i])) ? order[j++] : order[i++];
-			}
-			while (i < middle) {
-				scratch[k++] = order[i++];
-			}
-			while (j < end) {
-				scratch[k++] = order[j++];
-			}
-		}
-		memcpy(order, scratch, sizeof(int) * (size_t)count);
-	}
 }
 
 /* Builds node `node` over order[first, first + count) and its subtree; returns the next free
@@ -61,7 +34,7 @@ static int build_node(plait_element_tree *tree, const vec3 *centre, int *scratch
 	}
 	vec3 extent = v3_sub(upper, lower);
 	int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
-	sort_by_axis(tree->order + first, count, centre, axis, scratch);
+	plait_sort_by_axis(tree->order + first, count, centre, axis, scratch);
 	int left = next_free;
 	n->first = left;
 	n->count = 0;

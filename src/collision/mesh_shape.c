@@ -1,5 +1,7 @@
 #include "collision/mesh_shape.h"
 
+#include "collision/axis_sort.h"
+
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,12 +21,6 @@ void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *al
 	memset(shape, 0, sizeof *shape);
 }
 
-typedef struct build_context {
-	plait_mesh_shape *shape;
-	vec3 *centroid;
-	int axis; /* for the comparison */
-} build_context;
-
 static void triangle_bounds(const plait_mesh_shape *shape, int t, vec3 *lower, vec3 *upper)
 {
 	const int *tri = shape->triangles[t];
@@ -34,36 +30,6 @@ static void triangle_bounds(const plait_mesh_shape *shape, int t, vec3 *lower, v
 		const vec3 *start = shape->start_positions;
 		*lower = v3_min(*lower, v3_min(start[tri[0]], v3_min(start[tri[1]], start[tri[2]])));
 		*upper = v3_max(*upper, v3_max(start[tri[0]], v3_max(start[tri[1]], start[tri[2]])));
-	}
-}
-
-static float axis_value(vec3 v, int axis)
-{
-	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
-}
-
-/* Sorts order[first, first + count) by centroid along axis: insertion-free, deterministic
- * (ties by triangle index). */
-static void sort_by_axis(int *order, int count, const vec3 *centroid, int axis, int *scratch)
-{
-	/* Bottom-up merge sort: qsort needs global state for the axis, and must be stable here. */
-	for (int width = 1; width < count; width *= 2) {
-		for (int start = 0; start < count; start += 2 * width) {
-			int middle = start + width < count ? start + width : count;
-			int end = start + 2 * width < count ? start + 2 * width : count;
-			int i = start, j = middle, k = start;
-			while (i < middle && j < end) {
-				float a = axis_value(centroid[order[i]], axis), b = axis_value(centroid[order[j]], axis);
-				scratch[k++] = (b < a || (b == a && order[j] < order[i])) ? order[j++] : order[i++];
-			}
-			while (i < middle) {
-				scratch[k++] = order[i++];
-			}
-			while (j < end) {
-				scratch[k++] = order[j++];
-			}
-		}
-		memcpy(order, scratch, sizeof(int) * (size_t)count);
 	}
 }
 
@@ -91,7 +57,7 @@ static int build_node(plait_mesh_shape *shape, const vec3 *centroid, int *scratc
 	}
 	vec3 extent = v3_sub(c_upper, c_lower);
 	int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
-	sort_by_axis(shape->triangle_order + first, count, centroid, axis, scratch);
+	plait_sort_by_axis(shape->triangle_order + first, count, centroid, axis, scratch);
 	int half = count / 2;
 	int left = next_free;
 	n->first = left;
@@ -187,7 +153,8 @@ static int compare_edge_keys(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-bool plait_triangles_are_closed(const int (*triangles)[3], int triangle_count, const plait_allocator *allocator)
+bool plait_triangles_are_closed(const int (*triangles)[3], int triangle_count,
+                                const plait_allocator *allocator)
 {
 	if (triangle_count <= 0) {
 		return false;

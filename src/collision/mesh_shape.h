@@ -37,7 +37,8 @@ typedef struct plait_mesh_shape {
 } plait_mesh_shape;
 
 /* Whether every edge of the triangles is shared by exactly two of them. */
-bool plait_triangles_are_closed(const int (*triangles)[3], int triangle_count, const plait_allocator *allocator);
+bool plait_triangles_are_closed(const int (*triangles)[3], int triangle_count,
+                                const plait_allocator *allocator);
 
 /* Copies positions and fans the faces into triangles; builds the hierarchy. */
 plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocator *allocator,

@@ -29,7 +29,7 @@ void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
 	}
 }
 
-static float combined_friction(float a, float b)
+float plait_combined_friction(float a, float b)
 {
 	float friction = 0.5f * (a + b);
 	return friction > 1.0f ? 1.0f : friction;
@@ -415,7 +415,7 @@ static void collide_collider_range(void *context, int begin, int end)
 		float radius = (p->radius[i] + c->thickness) * inverse_scale;
 		if (c->shape.type == PLAIT_SHAPE_MESH) {
 			vec3 normal, motion;
-			float friction = combined_friction(mat->friction, c->friction);
+			float friction = plait_combined_friction(mat->friction, c->friction);
 			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, sim->substep == 0, &normal,
 			                            &motion)) {
 				/* Where the touched surface point was at the substep's start, to where it is. */
@@ -455,7 +455,7 @@ static void collide_collider_range(void *context, int begin, int end)
 			record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
 			continue;
 		}
-		float friction = combined_friction(mat->friction, c->friction);
+		float friction = plait_combined_friction(mat->friction, c->friction);
 		vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
 		p->point[i].x = plait_rigid_apply(r1, v3_add(p1, correction));
 		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
@@ -551,8 +551,8 @@ static int collide_pair(plait_sim *sim, int i, int j)
 	const plait_material *mi = &sim->materials[p->material[i]];
 	const plait_material *mj = &sim->materials[p->material[j]];
 	float wi = p->point[i].w / w_sum, wj = p->point[j].w / w_sum;
-	vec3 correction =
-	    contact_correction(normal, depth, v3_sub(d1, d0), combined_friction(mi->friction, mj->friction));
+	vec3 correction = contact_correction(normal, depth, v3_sub(d1, d0),
+	                                     plait_combined_friction(mi->friction, mj->friction));
 	p->point[i].x = v3_mul_add(p->point[i].x, -wi, correction);
 	p->point[j].x = v3_mul_add(p->point[j].x, wj, correction);
 

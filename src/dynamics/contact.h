@@ -15,6 +15,9 @@
 
 #include "dynamics/sim.h"
 
+/* Friction of a contact: the average of the two surfaces', clipped at 1 (seed 000 §5.5). */
+float plait_combined_friction(float a, float b);
+
 /* Interpolates the collider transforms for the substep [t0, t1] (fractions of the frame). */
 void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1);
 

@@ -562,12 +562,6 @@ static bool shares_vertex(const int *v, int n)
 	return false;
 }
 
-static float friction_of(const plait_material *a, const plait_material *b)
-{
-	float friction = 0.5f * (a->friction + b->friction);
-	return friction > 1.0f ? 1.0f : friction;
-}
-
 static float mean_radius(const plait_particles *p, const int *v, int n)
 {
 	float sum = 0.0f;
@@ -772,7 +766,7 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	                     (uint8_t)type,
 	                     (uint8_t)self,
 	                     distance,
-	                     friction_of(first, second),
+	                     plait_combined_friction(first->friction, second->friction),
 	                     1.0f,
 	                     {0.0f, 1.0f, 0.0f},
 	                     {1.0f, 1.0f},

@@ -1,5 +1,7 @@
 #include "frame_check.h"
 
+#include "grow_array.h"
+
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
@@ -35,21 +37,6 @@ void plait_frame_checker_free(plait_frame_checker *checker)
 	free(checker->counts.pairs);
 	free(checker->counts.inside);
 	*checker = (plait_frame_checker){0};
-}
-
-static bool plait_reserve(void **array, int *capacity, long long needed, size_t item_size)
-{
-	if (needed <= *capacity)
-		return true;
-	if (needed > INT_MAX / 2)
-		return false;
-	int next = (int)needed + (int)needed / 2;
-	void *grown = realloc(*array, (size_t)next * item_size);
-	if (grown == NULL)
-		return false;
-	*array = grown;
-	*capacity = next;
-	return true;
 }
 
 static bool plait_has_triangles_to_check(const plait_manifest_object *object)
@@ -335,10 +322,10 @@ static bool plait_inside_mesh(const plait_frame_checker *checker, const plait_bo
 
 static bool plait_build_collider_tree(plait_frame_checker *checker, int c, const plait_frame_mesh *mesh)
 {
-	if (!plait_reserve((void **)&checker->collider_triangles, &checker->collider_capacity,
-	                   mesh->triangle_count, sizeof *checker->collider_triangles) ||
-	    !plait_reserve((void **)&checker->collider_boxes, &checker->collider_box_capacity,
-	                   mesh->triangle_count, sizeof *checker->collider_boxes))
+	if (!plait_grow_array((void **)&checker->collider_triangles, &checker->collider_capacity,
+	                      mesh->triangle_count, sizeof *checker->collider_triangles) ||
+	    !plait_grow_array((void **)&checker->collider_boxes, &checker->collider_box_capacity,
+	                      mesh->triangle_count, sizeof *checker->collider_boxes))
 		return false;
 	int base = checker->first_vertex[c];
 	for (int t = 0; t < mesh->triangle_count; ++t) {
@@ -405,11 +392,12 @@ bool plait_frame_check(plait_frame_checker *checker, const plait_frame_mesh *mes
 		if (plait_has_triangles_to_check(&m->objects[o]))
 			triangles += meshes[o].triangle_count;
 	}
-	if (!plait_reserve((void **)&checker->positions, &checker->position_capacity, vertices,
-	                   sizeof *checker->positions) ||
-	    !plait_reserve((void **)&checker->triangles, &checker->triangle_capacity, triangles,
-	                   sizeof *checker->triangles) ||
-	    !plait_reserve((void **)&checker->boxes, &checker->box_capacity, triangles, sizeof *checker->boxes))
+	if (!plait_grow_array((void **)&checker->positions, &checker->position_capacity, vertices,
+	                      sizeof *checker->positions) ||
+	    !plait_grow_array((void **)&checker->triangles, &checker->triangle_capacity, triangles,
+	                      sizeof *checker->triangles) ||
+	    !plait_grow_array((void **)&checker->boxes, &checker->box_capacity, triangles,
+	                      sizeof *checker->boxes))
 		return plait_tool_error_set(error, "out of memory (%lld vertices, %lld triangles)", vertices,
 		                            triangles);
 	int count = 0;

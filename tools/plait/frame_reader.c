@@ -1,5 +1,7 @@
 #include "frame_reader.h"
 
+#include "grow_array.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -8,21 +10,6 @@
 #include <string.h>
 
 #define PLAIT_PC2_HEADER_SIZE 32
-
-static bool plait_grow_array(void **array, int *capacity, int needed, size_t item_size)
-{
-	if (needed <= *capacity)
-		return true;
-	int next = *capacity > 0 ? *capacity : 256;
-	while (next < needed)
-		next = next > INT_MAX / 2 ? INT_MAX : next * 2;
-	void *grown = realloc(*array, (size_t)next * item_size);
-	if (grown == NULL)
-		return false;
-	*array = grown;
-	*capacity = next;
-	return true;
-}
 
 static const char *plait_skip_blanks(const char *c, const char *end)
 {

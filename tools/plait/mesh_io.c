@@ -1,5 +1,7 @@
 #include "mesh_io.h"
 
+#include "grow_array.h"
+
 #include "mesh_sanity.h"
 
 #include <assimp/cimport.h>
@@ -24,21 +26,6 @@ typedef struct plait_mesh_builder {
 	plait_tool_error *error;
 } plait_mesh_builder;
 
-static bool plait_grow(void **array, int *capacity, int needed, size_t item_size)
-{
-	if (needed <= *capacity)
-		return true;
-	int next = *capacity > 0 ? *capacity : 64;
-	while (next < needed)
-		next = next > INT_MAX / 2 ? INT_MAX : next * 2;
-	void *grown = realloc(*array, (size_t)next * item_size);
-	if (grown == NULL)
-		return false;
-	*array = grown;
-	*capacity = next;
-	return true;
-}
-
 // Row-major 4x4 (assimp's a1..d4) applied to a point.
 static plait_vec3 plait_transform_point(const double m[16], double x, double y, double z)
 {
@@ -58,7 +45,7 @@ static bool plait_add_mesh(plait_mesh_builder *b, unsigned mesh_index, const dou
 		                            mesh->mNumVertices);
 	int base = b->soup.vertex_count;
 	int vertex_count = base + (int)mesh->mNumVertices;
-	if (!plait_grow((void **)&b->soup.positions, &b->vertex_capacity, vertex_count, sizeof(plait_vec3)))
+	if (!plait_grow_array((void **)&b->soup.positions, &b->vertex_capacity, vertex_count, sizeof(plait_vec3)))
 		return plait_tool_error_set(b->error, "%s: out of memory", b->path);
 	for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
 		double x = mesh->mVertices[i].x, y = mesh->mVertices[i].y, z = mesh->mVertices[i].z;
@@ -92,10 +79,10 @@ static bool plait_add_mesh(plait_mesh_builder *b, unsigned mesh_index, const dou
 		}
 		int size = (int)face->mNumIndices;
 		if (b->soup.index_count > INT_MAX / 2 - size ||
-		    !plait_grow((void **)&b->soup.face_sizes, &b->face_capacity, b->soup.face_count + 1,
-		                sizeof(int)) ||
-		    !plait_grow((void **)&b->soup.face_indices, &b->index_capacity, b->soup.index_count + size,
-		                sizeof(int)))
+		    !plait_grow_array((void **)&b->soup.face_sizes, &b->face_capacity, b->soup.face_count + 1,
+		                      sizeof(int)) ||
+		    !plait_grow_array((void **)&b->soup.face_indices, &b->index_capacity, b->soup.index_count + size,
+		                      sizeof(int)))
 			return plait_tool_error_set(b->error, "%s: out of memory", b->path);
 		b->soup.face_sizes[b->soup.face_count++] = size;
 		for (int k = 0; k < size; ++k)
