@@ -322,7 +322,12 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 		free_elements(mc, a);
 		return false;
 	}
-	mc->active = true;
+	/* One object that does not collide with itself meets nothing here: its contacts with
+	 * colliders are the particle pass's (contact.c). */
+	mc->active = mc->object_count > 1 || (mc->object_count == 1 && mc->objects[0].self);
+	if (!mc->active) {
+		free_elements(mc, a);
+	}
 	return true;
 }
 
