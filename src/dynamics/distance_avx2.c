@@ -7,9 +7,25 @@
 
 #include "dynamics/points_avx2.h"
 
+/* Masked moves are slow on some processors (a masked store is microcoded on AMD's): full
+ * batches use plain ones. */
+static inline __m256 load_lanes(const float *from, __m256i lanes, int count)
+{
+	return count == 8 ? _mm256_loadu_ps(from) : _mm256_maskload_ps(from, lanes);
+}
+
+static inline void store_lanes(float *to, __m256i lanes, int count, __m256 value)
+{
+	if (count == 8) {
+		_mm256_storeu_ps(to, value);
+	} else {
+		_mm256_maskstore_ps(to, lanes, value);
+	}
+}
+
 /* Projects constraints [c, c + count), count <= 8. Lanes past count compute on copies of lane
  * 0, are masked out of the block's arrays and are not written back. */
-static inline void project8(plait_distance_block *block, plait_point *points, int c, int count, __m256 ih2)
+static inline __attribute__((always_inline)) void project8(plait_distance_block *block, plait_point *points, int c, int count, __m256 ih2)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 negative_zero = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-12f);
@@ -29,9 +45,9 @@ static inline void project8(plait_distance_block *block, plait_point *points, in
 	__m256 length_sq =
 	    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
 	__m256 length = _mm256_max_ps(_mm256_sqrt_ps(length_sq), tiny);
-	__m256 C = _mm256_sub_ps(length, _mm256_maskload_ps(block->rest + c, lanes));
-	__m256 alpha = _mm256_blendv_ps(_mm256_maskload_ps(block->compliance_compression + c, lanes),
-	                                _mm256_maskload_ps(block->compliance_tension + c, lanes),
+	__m256 C = _mm256_sub_ps(length, load_lanes(block->rest + c, lanes, count));
+	__m256 alpha = _mm256_blendv_ps(load_lanes(block->compliance_compression + c, lanes, count),
+	                                load_lanes(block->compliance_tension + c, lanes, count),
 	                                _mm256_cmp_ps(C, zero, _CMP_GT_OQ));
 	__m256 w_sum = _mm256_add_ps(wi, wj);
 	__m256 moving = _mm256_cmp_ps(w_sum, zero, _CMP_GT_OQ);
@@ -39,11 +55,11 @@ static inline void project8(plait_distance_block *block, plait_point *points, in
 	__m256 alpha_tilde = _mm256_mul_ps(_mm256_max_ps(alpha, zero), ih2);
 	__m256 denominator = _mm256_mul_ps(_mm256_add_ps(w_sum, alpha_tilde), length);
 	denominator = _mm256_blendv_ps(one, denominator, moving);
-	__m256 lambda = _mm256_maskload_ps(block->lambda + c, lanes);
+	__m256 lambda = load_lanes(block->lambda + c, lanes, count);
 	__m256 s = _mm256_div_ps(
 	    _mm256_sub_ps(_mm256_sub_ps(negative_zero, C), _mm256_mul_ps(alpha_tilde, lambda)), denominator);
 	s = _mm256_and_ps(s, active);
-	_mm256_maskstore_ps(block->lambda + c, lanes, _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
+	store_lanes(block->lambda + c, lanes, count, _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
 	__m256 si = _mm256_mul_ps(wi, s), sj = _mm256_mul_ps(wj, s);
 	xi = _mm256_sub_ps(xi, _mm256_mul_ps(si, dx));
 	yi = _mm256_sub_ps(yi, _mm256_mul_ps(si, dy));
