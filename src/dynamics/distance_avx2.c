@@ -25,7 +25,8 @@ static inline void store_lanes(float *to, __m256i lanes, int count, __m256 value
 
 /* Projects constraints [c, c + count), count <= 8. Lanes past count compute on copies of lane
  * 0, are masked out of the block's arrays and are not written back. */
-static inline __attribute__((always_inline)) void project8(plait_distance_block *block, plait_point *points, int c, int count, __m256 ih2)
+static inline __attribute__((always_inline)) void project8(plait_distance_block *block, plait_point *points,
+                                                           int c, int count, __m256 ih2)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 negative_zero = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-12f);
