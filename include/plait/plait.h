@@ -200,12 +200,14 @@ typedef struct plait_mesh_def {
 } plait_mesh_def;
 
 /* Tethers (long-range attachments, seed 004): each free vertex of a cloth is tied to its
- * nearest pinned vertex and may never get farther from it than its rest distance times
- * tether_scale. They stop a hanging cloth from stretching when iterations are few. */
+ * nearest pinned vertices (up to four) and may never get farther from any of them than its
+ * rest distance times tether_scale. They stop a hanging cloth from stretching when iterations
+ * are few; tying a vertex to several pins keeps the tethers themselves from pulling apart the
+ * cloth where the nearest pin changes. */
 typedef enum plait_tether_mode {
 	PLAIT_TETHER_NONE = 0,
-	PLAIT_TETHER_EUCLIDEAN, /* nearest pin and distance in a straight line in the rest shape */
-	PLAIT_TETHER_GEODESIC,  /* nearest pin and distance along the mesh's edges */
+	PLAIT_TETHER_EUCLIDEAN, /* nearest pins and distances in a straight line in the rest shape */
+	PLAIT_TETHER_GEODESIC,  /* nearest pins and distances along the mesh's edges */
 } plait_tether_mode;
 
 /* How a cloth resists bending. */

@@ -324,55 +324,6 @@ void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particle
 	}
 }
 
-typedef struct tether_job {
-	plait_tether_block *block;
-	plait_point *points;
-} tether_job;
-
-static void tether_range(void *context, int begin, int end)
-{
-	tether_job *job = context;
-	const plait_tether_block *block = job->block;
-	plait_point *points = job->points;
-	for (int c = begin; c < end; ++c) {
-		plait_point *p = &points[block->pair[c][0]], *anchor = &points[block->pair[c][1]];
-		float w_sum = p->w + anchor->w;
-		if (w_sum == 0.0f) {
-			continue;
-		}
-		vec3 d = v3_sub(p->x, anchor->x);
-		float length = sqrtf(v3_length_sq(d));
-		float excess = length - block->length[c];
-		if (excess <= 0.0f) {
-			continue;
-		}
-		vec3 correction = v3_scale(d, block->stiffness[c] * excess / (length * w_sum));
-		p->x = v3_mul_add(p->x, -p->w, correction);
-		if (anchor->w != 0.0f) {
-			anchor->x = v3_mul_add(anchor->x, anchor->w, correction);
-		}
-	}
-}
-
-#define TETHER_GRAIN 2048
-
-void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel)
-{
-	tether_job job = {block, particles->point};
-	/* Tethers are built one per particle, anchored at pins: then each writes its own particle
-	 * only and they can run side by side. An anchor set free since (its pin released) is
-	 * written too, and then they run in order. */
-	bool fixed_anchors = true;
-	for (int c = 0; c < block->count && fixed_anchors; ++c) {
-		fixed_anchors = particles->point[block->pair[c][1]].w == 0.0f;
-	}
-	if (fixed_anchors) {
-		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
-	} else {
-		tether_range(&job, 0, block->count);
-	}
-}
-
 float plait_distance_max_strain(const plait_distance_block *block, const plait_particles *particles)
 {
 	float worst = 0.0f;

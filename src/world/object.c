@@ -285,7 +285,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	          (!bend_distance || (bend_pairs != NULL && bend_pair_count >= 0)) &&
 	          plait_sim_reserve_distance(sim, &sim->bend_distance, bend_pair_count) &&
 	          plait_sim_reserve_aero(sim, topology->triangle_count) &&
-	          (def->tethers == PLAIT_TETHER_NONE || plait_sim_reserve_tethers(sim, vertex_count));
+	          (def->tethers == PLAIT_TETHER_NONE || plait_sim_reserve_tethers(sim, vertex_count * plait_tethers_per_vertex(def->pin_count)));
 	if (!ok) {
 		plait_free(a, polygon_area);
 		plait_free(a, triangle_area);

@@ -1,0 +1,306 @@
+/* Solving tethers (long-range attachments, seed 004). A particle may have several tethers (to
+ * its nearest pins, world/tethers.c): it must end within every one's reach, so it is moved to
+ * the nearest point of the intersection of their balls, found exactly rather than by repeated
+ * projection. Repeated projection crawls where two balls barely overlap (a vertex halfway
+ * between two pins, on the line joining them, is held at the single point where they touch),
+ * and left such vertices 0.7% past their tether after eight rounds. */
+#include "dynamics/constraints.h"
+
+#include <math.h>
+
+#define TETHER_GRAIN 2048
+#define MAX_ROW 8             /* tethers of one particle handled exactly; more are projected in turn */
+#define INSIDE_TOLERANCE 1e-6 /* relative to a ball's radius, for rounding in the candidates */
+
+/* The candidates are found in double precision: the circle where two spheres meet comes from
+ * a difference of squares that loses most of a float's digits when the circle is small. */
+typedef struct dvec3 {
+	double x, y, z;
+} dvec3;
+
+static dvec3 d3(vec3 a)
+{
+	return (dvec3){a.x, a.y, a.z};
+}
+static dvec3 d3_add(dvec3 a, dvec3 b)
+{
+	return (dvec3){a.x + b.x, a.y + b.y, a.z + b.z};
+}
+static dvec3 d3_sub(dvec3 a, dvec3 b)
+{
+	return (dvec3){a.x - b.x, a.y - b.y, a.z - b.z};
+}
+static dvec3 d3_scale(dvec3 a, double s)
+{
+	return (dvec3){a.x * s, a.y * s, a.z * s};
+}
+static double d3_dot(dvec3 a, dvec3 b)
+{
+	return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static dvec3 d3_cross(dvec3 a, dvec3 b)
+{
+	return (dvec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+static double d3_length(dvec3 a)
+{
+	return sqrt(d3_dot(a, a));
+}
+
+typedef struct ball {
+	dvec3 centre;
+	double radius;
+} ball;
+
+static bool inside_all(dvec3 q, const ball *balls, int count)
+{
+	for (int k = 0; k < count; ++k) {
+		double reach = balls[k].radius * (1.0 + INSIDE_TOLERANCE);
+		dvec3 d = d3_sub(q, balls[k].centre);
+		if (d3_dot(d, d) > reach * reach) {
+			return false;
+		}
+	}
+	return true;
+}
+
+/* Keeps q as the best candidate when it lies in every ball and nearer p than the best so far. */
+static void consider(dvec3 p, dvec3 q, const ball *balls, int count, dvec3 *best, double *best_distance_sq)
+{
+	dvec3 d = d3_sub(q, p);
+	double distance_sq = d3_dot(d, d);
+	if (distance_sq < *best_distance_sq && inside_all(q, balls, count)) {
+		*best = q;
+		*best_distance_sq = distance_sq;
+	}
+}
+
+/* The circle where the spheres of balls a and b meet: centre, unit axis, radius. False when
+ * they do not meet (or are concentric). A tangent pair gives a circle of radius zero. */
+static bool meeting_circle(ball a, ball b, dvec3 *centre, dvec3 *axis, double *radius)
+{
+	dvec3 d = d3_sub(b.centre, a.centre);
+	double separation = d3_length(d);
+	if (separation <= 0.0) {
+		return false;
+	}
+	*axis = d3_scale(d, 1.0 / separation);
+	double along = 0.5 * (separation + (a.radius * a.radius - b.radius * b.radius) / separation);
+	double radius_sq = a.radius * a.radius - along * along;
+	if (radius_sq < -2.0 * INSIDE_TOLERANCE * a.radius * a.radius) {
+		return false;
+	}
+	*centre = d3_add(a.centre, d3_scale(*axis, along));
+	*radius = sqrt(radius_sq > 0.0 ? radius_sq : 0.0);
+	return true;
+}
+
+/* A unit vector perpendicular to the unit vector n. */
+static dvec3 perpendicular(dvec3 n)
+{
+	dvec3 other = fabs(n.x) < 0.6 ? (dvec3){1.0, 0.0, 0.0} : (dvec3){0.0, 1.0, 0.0};
+	dvec3 c = d3_cross(n, other);
+	return d3_scale(c, 1.0 / d3_length(c));
+}
+
+/* The nearest point to p in the intersection of the balls. The nearest point lies on the
+ * boundary of one, two or three of them (more only in degenerate cases), so the candidates
+ * are: p's projection onto each ball, its nearest point on the circle where each two meet,
+ * and the points where each three meet; the nearest candidate inside every ball wins. False
+ * when no candidate is (the balls have no common point, as when pins are pulled apart). */
+static bool nearest_in_balls(vec3 point, const ball *balls, int count, vec3 *out)
+{
+	dvec3 p = d3(point), best = p;
+	double best_distance_sq = INFINITY;
+	for (int i = 0; i < count; ++i) {
+		dvec3 d = d3_sub(p, balls[i].centre);
+		double length = d3_length(d);
+		if (length > balls[i].radius) {
+			consider(p, d3_add(balls[i].centre, d3_scale(d, balls[i].radius / length)), balls, count, &best,
+			         &best_distance_sq);
+		}
+	}
+	for (int i = 0; i < count; ++i) {
+		for (int j = i + 1; j < count; ++j) {
+			dvec3 centre, axis;
+			double radius;
+			if (!meeting_circle(balls[i], balls[j], &centre, &axis, &radius)) {
+				continue;
+			}
+			dvec3 offset = d3_sub(p, centre);
+			dvec3 in_plane = d3_sub(offset, d3_scale(axis, d3_dot(offset, axis)));
+			double length = d3_length(in_plane);
+			dvec3 direction = length > 1e-300 ? d3_scale(in_plane, 1.0 / length) : perpendicular(axis);
+			consider(p, d3_add(centre, d3_scale(direction, radius)), balls, count, &best, &best_distance_sq);
+			if (radius <= 0.0) {
+				continue;
+			}
+			/* Where a third sphere crosses this circle: centre + radius (cos t e1 + sin t e2)
+			 * at distance r_k from c_k gives A cos t + B sin t = C. */
+			dvec3 e1 = perpendicular(axis), e2 = d3_cross(axis, e1);
+			/* Every third ball, not only later ones: a small circle amplifies rounding, and
+			 * the same point found from a larger one survives it. */
+			for (int k = 0; k < count; ++k) {
+				if (k == i || k == j) {
+					continue;
+				}
+				dvec3 v = d3_sub(balls[k].centre, centre);
+				double a = d3_dot(v, e1), b = d3_dot(v, e2);
+				double c =
+				    (radius * radius + d3_dot(v, v) - balls[k].radius * balls[k].radius) / (2.0 * radius);
+				double norm = sqrt(a * a + b * b);
+				/* Spheres whose centres lie in one plane with a common point on it touch
+				 * there only (|C| = norm): rounding must not lose that point. */
+				if (norm <= 0.0 || fabs(c) > norm + INSIDE_TOLERANCE * balls[k].radius) {
+					continue;
+				}
+				double cosine = c / norm > 1.0 ? 1.0 : c / norm < -1.0 ? -1.0 : c / norm;
+				double base = atan2(b, a), spread = acos(cosine);
+				for (int sign = -1; sign <= 1; sign += 2) {
+					double t = base + sign * spread;
+					dvec3 q =
+					    d3_add(centre, d3_add(d3_scale(e1, radius * cos(t)), d3_scale(e2, radius * sin(t))));
+					consider(p, q, balls, count, &best, &best_distance_sq);
+				}
+			}
+		}
+	}
+	*out = v3((float)best.x, (float)best.y, (float)best.z);
+	return best_distance_sq < INFINITY;
+}
+
+/* Pulls a particle back within tether c's length of its anchor; returns whether it moved. */
+static bool project_tether(const plait_tether_block *block, plait_point *points, int c)
+{
+	plait_point *p = &points[block->pair[c][0]], *anchor = &points[block->pair[c][1]];
+	float w_sum = p->w + anchor->w;
+	if (w_sum == 0.0f) {
+		return false;
+	}
+	vec3 d = v3_sub(p->x, anchor->x);
+	float length = sqrtf(v3_length_sq(d));
+	float excess = length - block->length[c];
+	if (excess <= 0.0f) {
+		return false;
+	}
+	vec3 correction = v3_scale(d, block->stiffness[c] * excess / (length * w_sum));
+	p->x = v3_mul_add(p->x, -p->w, correction);
+	if (anchor->w != 0.0f) {
+		anchor->x = v3_mul_add(anchor->x, anchor->w, correction);
+	}
+	return true;
+}
+
+/* The tethers [first, end) of one particle, with anchors that do not move (pins). */
+/* Kept out of line: the common case in project_row stays small. */
+static __attribute__((noinline)) void project_row_exactly(const plait_tether_block *block,
+                                                          plait_point *points, int first, int end)
+{
+	plait_point *p = &points[block->pair[first][0]];
+	ball balls[MAX_ROW];
+	int count = 0;
+	for (int c = first; c < end; ++c) {
+		balls[count++] = (ball){d3(points[block->pair[c][1]].x), block->length[c]};
+	}
+	vec3 target;
+	if (nearest_in_balls(p->x, balls, count, &target)) {
+		p->x = v3_lerp(p->x, target, block->stiffness[first]);
+	} else {
+		/* No common point: each in turn, the nearest pin (last) holding. */
+		for (int c = first; c < end; ++c) {
+			project_tether(block, points, c);
+		}
+	}
+}
+
+static inline void project_row(const plait_tether_block *block, plait_point *points, int first, int end)
+{
+	plait_point *p = &points[block->pair[first][0]];
+	if (p->w == 0.0f) {
+		return;
+	}
+	/* Most often one tether is taut and the projection onto it lies within the others' reach:
+	 * that is then the nearest point, found in float without the candidates. */
+	int worst = -1;
+	float worst_excess = 0.0f;
+	for (int c = first; c < end; ++c) {
+		float distance_sq = v3_length_sq(v3_sub(p->x, points[block->pair[c][1]].x));
+		if (distance_sq <= block->length[c] * block->length[c]) {
+			continue; /* slack, as most are: no square root */
+		}
+		float excess = sqrtf(distance_sq) - block->length[c];
+		if (excess > worst_excess) {
+			worst_excess = excess;
+			worst = c;
+		}
+	}
+	if (worst < 0) {
+		return;
+	}
+	vec3 anchor = points[block->pair[worst][1]].x;
+	vec3 d = v3_sub(p->x, anchor);
+	vec3 projected = v3_mul_add(anchor, block->length[worst] / v3_length(d), d);
+	bool within = true;
+	for (int c = first; c < end && within; ++c) {
+		float reach = block->length[c] * (1.0f + (float)INSIDE_TOLERANCE);
+		within = c == worst || v3_length_sq(v3_sub(projected, points[block->pair[c][1]].x)) <= reach * reach;
+	}
+	if (within) {
+		/* One stiffness per cloth: the row's tethers share it. */
+		p->x = v3_lerp(p->x, projected, block->stiffness[first]);
+	} else {
+		project_row_exactly(block, points, first, end);
+	}
+}
+
+typedef struct tether_job {
+	plait_tether_block *block;
+	plait_point *points;
+	bool fixed_anchors;
+} tether_job;
+
+static void tether_range(void *context, int begin, int end)
+{
+	tether_job *job = context;
+	const plait_tether_block *block = job->block;
+	plait_point *points = job->points;
+	/* A particle's tethers are consecutive and solved together, so a range takes the particles
+	 * whose first tether lies in it, whole: ranges never share a particle. */
+	while (begin > 0 && begin < end && block->pair[begin][0] == block->pair[begin - 1][0]) {
+		++begin;
+	}
+	while (end < block->count && end > 0 && block->pair[end][0] == block->pair[end - 1][0]) {
+		++end;
+	}
+	for (int c = begin; c < end;) {
+		int row_end = c + 1;
+		while (row_end < end && block->pair[row_end][0] == block->pair[c][0]) {
+			++row_end;
+		}
+		if (row_end - c == 1 || row_end - c > MAX_ROW || !job->fixed_anchors) {
+			for (int k = c; k < row_end; ++k) {
+				project_tether(block, points, k);
+			}
+		} else {
+			project_row(block, points, c, row_end);
+		}
+		c = row_end;
+	}
+}
+
+void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel)
+{
+	/* Tethers are anchored at pins: then each particle's tethers write that particle only and
+	 * particles can run side by side. An anchor set free since (its pin released) is written
+	 * too, and then they run in order, each tether on its own. */
+	bool fixed_anchors = true;
+	for (int c = 0; c < block->count && fixed_anchors; ++c) {
+		fixed_anchors = particles->point[block->pair[c][1]].w == 0.0f;
+	}
+	tether_job job = {block, particles->point, fixed_anchors};
+	if (fixed_anchors) {
+		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
+	} else {
+		tether_range(&job, 0, block->count);
+	}
+}
