@@ -130,10 +130,6 @@ bool plait_shape_sweep(const plait_shape *shape, vec3 p0, vec3 p1, float radius,
 {
 	vec3 normal;
 	vec3 motion = v3_sub(p1, p0);
-	float travel = v3_length(motion);
-	/* Stop advancing within a small fraction of the radius (or of the path for radius 0). */
-	float tolerance = plait_maxf(1e-3f * radius, 1e-6f * (travel + 1.0f));
-	float t = 0.0f;
 	if (shape->type == PLAIT_SHAPE_PLANE) {
 		/* Exact for a plane: distance is linear in t. */
 		float d0 = v3_dot(shape->normal, v3_sub(p0, shape->point)) - radius;
@@ -172,6 +168,10 @@ bool plait_shape_sweep(const plait_shape *shape, vec3 p0, vec3 p1, float radius,
 		*toi = t_hit > 0.0f ? t_hit : 0.0f;
 		return true;
 	}
+	float travel = v3_length(motion);
+	/* Stop advancing within a small fraction of the radius (or of the path for radius 0). */
+	float tolerance = plait_maxf(1e-3f * radius, 1e-6f * (travel + 1.0f));
+	float t = 0.0f;
 	for (int step = 0; step < 64; ++step) {
 		vec3 p = v3_mul_add(p0, t, motion);
 		float gap = plait_shape_distance(shape, p, &normal) - radius;

@@ -49,6 +49,9 @@ void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float
                       plait_bend_kernel *kernel, plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. */
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel);
+/* Whether every tether's anchor is pinned, for the frame to come (pins change between
+ * frames only). */
+void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles);
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);
 
 /* Signed dihedral angle (radians, in (-pi, pi]) of the hinge p0-p1 with wings p2, p3: zero when

@@ -378,7 +378,9 @@ typedef struct collider_job {
 	const plait_collider *c;
 	bool bounded;
 	vec3 world_lower, world_upper; /* box of the collider over the substep, grown */
-	const int *indices;            /* the particles to test, or NULL for all */
+	vec3 ball_centre;              /* a ball holding the collider over the substep, grown */
+	float ball_radius;
+	const int *indices; /* the particles to test, or NULL for all */
 	_Atomic int contacts;
 } collider_job;
 
@@ -404,6 +406,12 @@ static void collide_collider_range(void *context, int begin, int end)
 			if (plait_maxf(a.x, b.x) < world_lower.x || plait_minf(a.x, b.x) > world_upper.x ||
 			    plait_maxf(a.y, b.y) < world_lower.y || plait_minf(a.y, b.y) > world_upper.y ||
 			    plait_maxf(a.z, b.z) < world_lower.z || plait_minf(a.z, b.z) > world_upper.z) {
+				continue;
+			}
+			/* The ball around the path (its midpoint, half its length) must reach the
+			 * collider's: for a round collider most of the box is out of it. */
+			float reach = job->ball_radius + 0.5f * v3_length(v3_sub(b, a));
+			if (v3_length_sq(v3_sub(v3_scale(v3_add(a, b), 0.5f), job->ball_centre)) > reach * reach) {
 				continue;
 			}
 		}
@@ -493,7 +501,20 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c, const 
 		world_lower = v3_sub(world_lower, v3(grow, grow, grow));
 		world_upper = v3_add(world_upper, v3(grow, grow, grow));
 	}
-	collider_job job = {sim, c, bounded, world_lower, world_upper, indices, 0};
+	/* The shape's bounding ball (exact for a sphere) where it is at the substep's middle, grown
+	 * by half its centre's travel: it holds the collider over the whole substep. Rotation
+	 * about the centre moves nothing out of it. */
+	vec3 centre = v3_scale(v3_add(lower0, upper0), 0.5f);
+	float radius =
+	    c->shape.type == PLAIT_SHAPE_SPHERE ? c->shape.radius : 0.5f * v3_length(v3_sub(upper0, lower0));
+	if (c->shape.type == PLAIT_SHAPE_SPHERE) {
+		centre = c->shape.center;
+	}
+	vec3 centre0 = plait_rigid_apply(r0, centre), centre1 = plait_rigid_apply(r1, centre);
+	vec3 ball_centre = v3_scale(v3_add(centre0, centre1), 0.5f);
+	float ball_radius = radius * plait_maxf(r0->scale, r1->scale) +
+	                    0.5f * v3_length(v3_sub(centre1, centre0)) + sim->largest_radius + c->thickness;
+	collider_job job = {sim, c, bounded, world_lower, world_upper, ball_centre, ball_radius, indices, 0};
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
 	return atomic_load_explicit(&job.contacts, memory_order_relaxed);

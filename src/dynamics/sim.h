@@ -155,6 +155,7 @@ typedef struct plait_tether_block {
 	int (*pair)[2];
 	float *length;
 	float *stiffness;
+	bool fixed_anchors; /* every anchor pinned: set at each frame's start (plait_sim_step) */
 } plait_tether_block;
 
 /* Cloth triangles that feel the air. weight[k] is the area (scene units^2) the triangle lends

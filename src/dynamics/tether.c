@@ -132,7 +132,7 @@ static bool nearest_in_balls(vec3 point, const ball *balls, int count, vec3 *out
 			double length = d3_length(in_plane);
 			dvec3 direction = length > 1e-300 ? d3_scale(in_plane, 1.0 / length) : perpendicular(axis);
 			consider(p, d3_add(centre, d3_scale(direction, radius)), balls, count, &best, &best_distance_sq);
-			if (radius <= 0.0) {
+			if (radius <= 0.0 || count < 3) {
 				continue;
 			}
 			/* Where a third sphere crosses this circle: centre + radius (cos t e1 + sin t e2)
@@ -288,17 +288,22 @@ static void tether_range(void *context, int begin, int end)
 	}
 }
 
+void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles)
+{
+	bool fixed_anchors = true;
+	for (int c = 0; c < block->count && fixed_anchors; ++c) {
+		fixed_anchors = particles->point[block->pair[c][1]].w == 0.0f;
+	}
+	block->fixed_anchors = fixed_anchors;
+}
+
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel)
 {
 	/* Tethers are anchored at pins: then each particle's tethers write that particle only and
 	 * particles can run side by side. An anchor set free since (its pin released) is written
 	 * too, and then they run in order, each tether on its own. */
-	bool fixed_anchors = true;
-	for (int c = 0; c < block->count && fixed_anchors; ++c) {
-		fixed_anchors = particles->point[block->pair[c][1]].w == 0.0f;
-	}
-	tether_job job = {block, particles->point, fixed_anchors};
-	if (fixed_anchors) {
+	tether_job job = {block, particles->point, block->fixed_anchors};
+	if (block->fixed_anchors) {
 		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
 	} else {
 		tether_range(&job, 0, block->count);
