@@ -27,8 +27,9 @@ static float random_unit(uint32_t *state)
 /* A block of independent constraints (disjoint pairs) of every kind the kernel branches on:
  * stretched and compressed, soft and rigid, one-sided (no resistance one way), pinned ends,
  * both ends pinned, coincident points. Counts that are not multiples of 8 or 16 exercise the
- * masked and scalar remainders. */
-static void make_block(plait_distance_block *block, plait_point *points, int count, uint32_t seed)
+ * masked and scalar remainders. A rigid block (every compliance zero) takes the kernels' path
+ * without multipliers. */
+static void make_block(plait_distance_block *block, plait_point *points, int count, uint32_t seed, bool rigid)
 {
 	uint32_t state = seed;
 	block->count = block->capacity = count;
@@ -42,9 +43,11 @@ static void make_block(plait_distance_block *block, plait_point *points, int cou
 		block->pair[c][1] = 2 * c;
 		block->rest[c] = 0.01f + random_unit(&state);
 		float alphas[4] = {0.0f, 1e-6f, 1e-3f, PLAIT_NO_RESISTANCE};
-		block->compliance_tension[c] = alphas[next_random(&state) % 4];
-		block->compliance_compression[c] = alphas[next_random(&state) % 4];
-		block->lambda[c] = random_unit(&state) - 0.5f;
+		block->compliance_tension[c] = rigid ? 0.0f : alphas[next_random(&state) % 4];
+		block->compliance_compression[c] = rigid ? 0.0f : alphas[next_random(&state) % 4];
+		block->lambda[c] = rigid ? 0.0f : random_unit(&state) - 0.5f;
+		block->compliant_count +=
+		    block->compliance_tension[c] != 0.0f || block->compliance_compression[c] != 0.0f;
 	}
 	for (int i = 0; i < 2 * count; ++i) {
 		points[i].x =
@@ -68,8 +71,9 @@ static void free_block(plait_distance_block *block)
 Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 {
 	int counts[] = {1, 7, 8, 15, 16, 17, 33, 1000};
-	for (size_t n = 0; n < sizeof counts / sizeof counts[0]; ++n) {
-		int count = counts[n];
+	for (size_t n = 0; n < 2 * sizeof counts / sizeof counts[0]; ++n) {
+		int count = counts[n / 2];
+		bool rigid = n % 2 == 1;
 		plait_point *reference = malloc(sizeof *reference * (size_t)(2 * count));
 		float *reference_lambda = malloc(sizeof(float) * (size_t)count);
 		for (int l = 0; l < 3; ++l) {
@@ -82,7 +86,8 @@ Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 			// aligned_alloc wants a size that is a multiple of the alignment (ASan enforces it).
 			size_t bytes = (sizeof(plait_point) * (size_t)(2 * count + 16) + 63) / 64 * 64;
 			plait_point *points = aligned_alloc(64, bytes);
-			make_block(&block, points, count, 12345u + (uint32_t)count);
+			make_block(&block, points, count, 12345u + (uint32_t)count, rigid);
+			cr_assert_eq(block.compliant_count == 0, rigid);
 			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
 			for (int sweep = 0; sweep < 5; ++sweep) {
 				kernel(&block, points, 0, count, 3600.0f);
@@ -95,8 +100,8 @@ Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 				memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
 			} else {
 				cr_assert(memcmp(reference, points, sizeof *reference * (size_t)(2 * count)) == 0,
-				          "level %d differs from the portable kernel at %d constraints", (int)levels[l],
-				          count);
+				          "level %d differs from the portable kernel at %d constraints (rigid %d)",
+				          (int)levels[l], count, (int)rigid);
 				cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
 				          "level %d multipliers differ at %d constraints", (int)levels[l], count);
 			}

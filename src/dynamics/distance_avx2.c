@@ -26,7 +26,7 @@ static inline void store_lanes(float *to, __m256i lanes, int count, __m256 value
 /* Projects constraints [c, c + count), count <= 8. Lanes past count compute on copies of lane
  * 0, are masked out of the block's arrays and are not written back. */
 static inline __attribute__((always_inline)) void project8(plait_distance_block *block, plait_point *points,
-                                                           int c, int count, __m256 ih2)
+                                                           int c, int count, __m256 ih2, bool rigid)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 negative_zero = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-12f);
@@ -46,21 +46,31 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 	__m256 length_sq =
 	    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
 	__m256 length = _mm256_max_ps(_mm256_sqrt_ps(length_sq), tiny);
-	__m256 C = _mm256_sub_ps(length, load_lanes(block->rest + c, lanes, count));
-	__m256 alpha = _mm256_blendv_ps(load_lanes(block->compliance_compression + c, lanes, count),
-	                                load_lanes(block->compliance_tension + c, lanes, count),
-	                                _mm256_cmp_ps(C, zero, _CMP_GT_OQ));
-	__m256 w_sum = _mm256_add_ps(wi, wj);
-	__m256 moving = _mm256_cmp_ps(w_sum, zero, _CMP_GT_OQ);
-	__m256 active = _mm256_and_ps(_mm256_cmp_ps(alpha, zero, _CMP_GE_OQ), moving);
-	__m256 alpha_tilde = _mm256_mul_ps(_mm256_max_ps(alpha, zero), ih2);
-	__m256 denominator = _mm256_mul_ps(_mm256_add_ps(w_sum, alpha_tilde), length);
-	denominator = _mm256_blendv_ps(one, denominator, moving);
-	__m256 lambda = load_lanes(block->lambda + c, lanes, count);
-	__m256 s = _mm256_div_ps(
-	    _mm256_sub_ps(_mm256_sub_ps(negative_zero, C), _mm256_mul_ps(alpha_tilde, lambda)), denominator);
-	s = _mm256_and_ps(s, active);
-	store_lanes(block->lambda + c, lanes, count, _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
+	__m256 s;
+	if (rigid) {
+		/* No compliance: alpha~ = 0 and lambda stays 0 (distance_scalar.c, project_rigid). */
+		__m256 C = _mm256_sub_ps(length, load_lanes(block->rest + c, lanes, count));
+		__m256 w_sum = _mm256_add_ps(wi, wj);
+		__m256 moving = _mm256_cmp_ps(w_sum, zero, _CMP_GT_OQ);
+		__m256 denominator = _mm256_blendv_ps(one, _mm256_mul_ps(w_sum, length), moving);
+		s = _mm256_and_ps(_mm256_div_ps(_mm256_sub_ps(negative_zero, C), denominator), moving);
+	} else {
+		__m256 C = _mm256_sub_ps(length, load_lanes(block->rest + c, lanes, count));
+		__m256 alpha = _mm256_blendv_ps(load_lanes(block->compliance_compression + c, lanes, count),
+		                                load_lanes(block->compliance_tension + c, lanes, count),
+		                                _mm256_cmp_ps(C, zero, _CMP_GT_OQ));
+		__m256 w_sum = _mm256_add_ps(wi, wj);
+		__m256 moving = _mm256_cmp_ps(w_sum, zero, _CMP_GT_OQ);
+		__m256 active = _mm256_and_ps(_mm256_cmp_ps(alpha, zero, _CMP_GE_OQ), moving);
+		__m256 alpha_tilde = _mm256_mul_ps(_mm256_max_ps(alpha, zero), ih2);
+		__m256 denominator = _mm256_mul_ps(_mm256_add_ps(w_sum, alpha_tilde), length);
+		denominator = _mm256_blendv_ps(one, denominator, moving);
+		__m256 lambda = load_lanes(block->lambda + c, lanes, count);
+		s = _mm256_div_ps(_mm256_sub_ps(_mm256_sub_ps(negative_zero, C), _mm256_mul_ps(alpha_tilde, lambda)),
+		                  denominator);
+		s = _mm256_and_ps(s, active);
+		store_lanes(block->lambda + c, lanes, count, _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
+	}
 	__m256 si = _mm256_mul_ps(wi, s), sj = _mm256_mul_ps(wj, s);
 	xi = _mm256_sub_ps(xi, _mm256_mul_ps(si, dx));
 	yi = _mm256_sub_ps(yi, _mm256_mul_ps(si, dy));
@@ -77,11 +87,20 @@ void plait_project_distance_avx2(plait_distance_block *block, plait_point *point
 {
 	const __m256 ih2 = _mm256_set1_ps(inverse_h_squared);
 	int c = begin;
-	for (; c + 8 <= end; c += 8) {
-		project8(block, points, c, 8, ih2);
-	}
-	if (c < end) {
-		project8(block, points, c, end - c, ih2);
+	if (block->compliant_count == 0) {
+		for (; c + 8 <= end; c += 8) {
+			project8(block, points, c, 8, ih2, true);
+		}
+		if (c < end) {
+			project8(block, points, c, end - c, ih2, true);
+		}
+	} else {
+		for (; c + 8 <= end; c += 8) {
+			project8(block, points, c, 8, ih2, false);
+		}
+		if (c < end) {
+			project8(block, points, c, end - c, ih2, false);
+		}
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them
 	 * dirty when the remainder is a tail call, and SSE instructions after that carry a false

@@ -70,7 +70,8 @@ static inline void scatter16(plait_point *points, const int *index, int count, _
 
 /* Projects constraints [c, c + count), count <= 16. Lanes past count compute on copies of
  * lane 0, are masked out of the block's arrays and are not written back. */
-static inline void project16(plait_distance_block *block, plait_point *points, int c, int count, __m512 ih2)
+static inline __attribute__((always_inline)) void project16(plait_distance_block *block, plait_point *points,
+                                                            int c, int count, __m512 ih2, bool rigid)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
 	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
@@ -90,22 +91,32 @@ static inline void project16(plait_distance_block *block, plait_point *points, i
 	__m512 length_sq =
 	    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
 	__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), tiny);
-	__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
-	__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
-	__m512 alpha =
-	    _mm512_mask_blend_ps(stretched, _mm512_maskz_loadu_ps(lanes, block->compliance_compression + c),
-	                         _mm512_maskz_loadu_ps(lanes, block->compliance_tension + c));
-	__m512 w_sum = _mm512_add_ps(wi, wj);
-	__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
-	__mmask16 active = _mm512_mask_cmp_ps_mask(moving, alpha, zero, _CMP_GE_OQ);
-	__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
-	__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
-	denominator = _mm512_mask_blend_ps(moving, one, denominator);
-	__m512 lambda = _mm512_maskz_loadu_ps(lanes, block->lambda + c);
-	__m512 s = _mm512_div_ps(
-	    _mm512_sub_ps(_mm512_sub_ps(negative_zero, C), _mm512_mul_ps(alpha_tilde, lambda)), denominator);
-	s = _mm512_maskz_mov_ps(active, s);
-	_mm512_mask_storeu_ps(block->lambda + c, lanes, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
+	__m512 s;
+	if (rigid) {
+		/* No compliance: alpha~ = 0 and lambda stays 0 (distance_scalar.c, project_rigid). */
+		__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
+		__m512 w_sum = _mm512_add_ps(wi, wj);
+		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
+		__m512 denominator = _mm512_mask_blend_ps(moving, one, _mm512_mul_ps(w_sum, length));
+		s = _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(negative_zero, C), denominator));
+	} else {
+		__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
+		__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
+		__m512 alpha =
+		    _mm512_mask_blend_ps(stretched, _mm512_maskz_loadu_ps(lanes, block->compliance_compression + c),
+		                         _mm512_maskz_loadu_ps(lanes, block->compliance_tension + c));
+		__m512 w_sum = _mm512_add_ps(wi, wj);
+		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
+		__mmask16 active = _mm512_mask_cmp_ps_mask(moving, alpha, zero, _CMP_GE_OQ);
+		__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
+		__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
+		denominator = _mm512_mask_blend_ps(moving, one, denominator);
+		__m512 lambda = _mm512_maskz_loadu_ps(lanes, block->lambda + c);
+		s = _mm512_div_ps(_mm512_sub_ps(_mm512_sub_ps(negative_zero, C), _mm512_mul_ps(alpha_tilde, lambda)),
+		                  denominator);
+		s = _mm512_maskz_mov_ps(active, s);
+		_mm512_mask_storeu_ps(block->lambda + c, lanes, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
+	}
 	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
 	xi = _mm512_sub_ps(xi, _mm512_mul_ps(si, dx));
 	yi = _mm512_sub_ps(yi, _mm512_mul_ps(si, dy));
@@ -122,11 +133,18 @@ void plait_project_distance_avx512(plait_distance_block *block, plait_point *poi
 {
 	const __m512 ih2 = _mm512_set1_ps(inverse_h_squared);
 	int c = begin;
-	for (; c + 16 <= end; c += 16) {
-		project16(block, points, c, 16, ih2);
+	bool rigid = block->compliant_count == 0;
+	if (rigid) {
+		for (; c + 16 <= end; c += 16) {
+			project16(block, points, c, 16, ih2, true);
+		}
+	} else {
+		for (; c + 16 <= end; c += 16) {
+			project16(block, points, c, 16, ih2, false);
+		}
 	}
 	if (c < end) {
-		project16(block, points, c, end - c, ih2);
+		project16(block, points, c, end - c, ih2, rigid);
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them
 	 * dirty when the remainder is a tail call, and SSE instructions after that carry a false

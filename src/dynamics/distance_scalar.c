@@ -2,6 +2,32 @@
 
 #include <math.h>
 
+/* A block without compliance: the general formula with alpha = 0 and lambda = 0, in the same
+ * operations (every constraint active where a particle moves). */
+static void project_rigid(plait_distance_block *block, plait_point *points, int begin, int end)
+{
+	const int(*pair)[2] = (const int(*)[2])block->pair;
+	const float *rest = block->rest;
+	for (int c = begin; c < end; ++c) {
+		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
+		float wi = pi->w, wj = pj->w;
+		float dx = pj->x.x - pi->x.x, dy = pj->x.y - pi->x.y, dz = pj->x.z - pi->x.z;
+		float length = sqrtf(dx * dx + dy * dy + dz * dz);
+		length = length > 1e-12f ? length : 1e-12f;
+		float C = length - rest[c];
+		float w_sum = wi + wj;
+		float denominator = w_sum > 0.0f ? w_sum * length : 1.0f;
+		float s = w_sum > 0.0f ? -C / denominator : 0.0f;
+		float si = wi * s, sj = wj * s;
+		pi->x.x = pi->x.x - si * dx;
+		pi->x.y = pi->x.y - si * dy;
+		pi->x.z = pi->x.z - si * dz;
+		pj->x.x = pj->x.x + sj * dx;
+		pj->x.y = pj->x.y + sj * dy;
+		pj->x.z = pj->x.z + sj * dz;
+	}
+}
+
 /* The reference arithmetic: the vector kernels repeat these operations lane by lane, in this
  * order, so the three give the same bits. */
 void plait_project_distance_scalar(plait_distance_block *block, plait_point *points, int begin, int end,
@@ -11,6 +37,10 @@ void plait_project_distance_scalar(plait_distance_block *block, plait_point *poi
 	const float *rest = block->rest, *tension = block->compliance_tension;
 	const float *compression = block->compliance_compression;
 	float *lambda = block->lambda;
+	if (block->compliant_count == 0) {
+		project_rigid(block, points, begin, end);
+		return;
+	}
 	for (int c = begin; c < end; ++c) {
 		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
 		float wi = pi->w, wj = pj->w;

@@ -127,6 +127,9 @@ typedef struct plait_distance_block {
 	float *compliance_tension;
 	float *compliance_compression;
 	float *lambda;
+	/* Constraints with a nonzero compliance either way. With none, the kernels take a path
+	 * without compliances and multipliers (lambda stays zero and is not written). */
+	int compliant_count;
 	plait_colouring colouring;
 } plait_distance_block;
 

@@ -295,16 +295,19 @@ void plait_sim_add_distance(plait_distance_block *b, int i, int j, float rest, f
 	b->compliance_tension[c] = compliance_tension;
 	b->compliance_compression[c] = compliance_compression;
 	b->lambda[c] = 0.0f;
+	b->compliant_count += compliance_tension != 0.0f || compliance_compression != 0.0f;
 }
 
 static void compact_distance(plait_distance_block *b, const int *remap, const plait_allocator *allocator)
 {
 	int kept = 0;
+	b->compliant_count = 0;
 	for (int c = 0; c < b->count; ++c) {
 		int i = remap[b->pair[c][0]], j = remap[b->pair[c][1]];
 		if (i < 0 || j < 0) {
 			continue;
 		}
+		b->compliant_count += b->compliance_tension[c] != 0.0f || b->compliance_compression[c] != 0.0f;
 		b->pair[kept][0] = i;
 		b->pair[kept][1] = j;
 		b->rest[kept] = b->rest[c];

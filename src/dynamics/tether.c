@@ -7,6 +7,7 @@
 #include "dynamics/constraints.h"
 
 #include <math.h>
+#include <stdint.h>
 
 #define TETHER_GRAIN 2048
 #define MAX_ROW 8             /* tethers of one particle handled exactly; more are projected in turn */
@@ -272,19 +273,51 @@ static void tether_range(void *context, int begin, int end)
 	while (end < block->count && end > 0 && block->pair[end][0] == block->pair[end - 1][0]) {
 		++end;
 	}
-	for (int c = begin; c < end;) {
-		int row_end = c + 1;
-		while (row_end < end && block->pair[row_end][0] == block->pair[c][0]) {
-			++row_end;
+	if (!job->fixed_anchors) {
+		for (int c = begin; c < end; ++c) {
+			project_tether(block, points, c);
 		}
-		if (row_end - c == 1 || row_end - c > MAX_ROW || !job->fixed_anchors) {
-			for (int k = c; k < row_end; ++k) {
-				project_tether(block, points, k);
+		return;
+	}
+	/* First which tethers are taut, in a loop without branches (most are slack, in patches the
+	 * branch predictor cannot learn); then the particles with a taut one. Projecting a
+	 * particle changes no other's test: anchors are pins. */
+	enum { CHUNK = 256 };
+	uint8_t taut[CHUNK + MAX_ROW];
+	for (int chunk = begin, chunk_end; chunk < end; chunk = chunk_end) {
+		/* Chunks end where a row does: each particle is tested and projected once. */
+		chunk_end = chunk + CHUNK < end ? chunk + CHUNK : end;
+		while (chunk_end < end && chunk_end - chunk < CHUNK + MAX_ROW &&
+		       block->pair[chunk_end][0] == block->pair[chunk_end - 1][0]) {
+			++chunk_end;
+		}
+		for (int c = chunk; c < chunk_end; ++c) {
+			vec3 d = v3_sub(points[block->pair[c][0]].x, points[block->pair[c][1]].x);
+			taut[c - chunk] = v3_length_sq(d) > block->length[c] * block->length[c];
+		}
+		for (int c = chunk; c < chunk_end; ++c) {
+			if (!taut[c - chunk]) {
+				continue;
 			}
-		} else {
-			project_row(block, points, c, row_end);
+			/* The particle's whole row; its later tethers are then skipped. */
+			int particle = block->pair[c][0];
+			int first = c;
+			while (first > chunk && block->pair[first - 1][0] == particle) {
+				--first;
+			}
+			int row_end = c + 1;
+			while (row_end < chunk_end && block->pair[row_end][0] == particle) {
+				++row_end;
+			}
+			if (row_end - first == 1 || row_end - first > MAX_ROW) {
+				for (int k = first; k < row_end; ++k) {
+					project_tether(block, points, k);
+				}
+			} else {
+				project_row(block, points, first, row_end);
+			}
+			c = row_end - 1;
 		}
-		c = row_end;
 	}
 }
 
