@@ -6,6 +6,7 @@ plait_rigid plait_rigid_from_transform(plait_transform transform)
 	r.translate = transform.translate;
 	r.rotation = m3_from_euler_deg(transform.rotate_deg);
 	r.scale = transform.scale > 0.0f ? transform.scale : 1.0f;
+	r.inverse_scale = 1.0f / r.scale;
 	return r;
 }
 
@@ -47,14 +48,12 @@ static float point_distance(vec3 p, vec3 center, float radius, vec3 fallback_nor
 	return length - radius;
 }
 
-float plait_shape_distance(const plait_shape *shape, vec3 p, vec3 *normal)
+float plait_shape_distance_general(const plait_shape *shape, vec3 p, vec3 *normal)
 {
 	switch (shape->type) {
 	case PLAIT_SHAPE_PLANE:
-		*normal = shape->normal;
-		return v3_dot(shape->normal, v3_sub(p, shape->point));
 	case PLAIT_SHAPE_SPHERE:
-		return point_distance(p, shape->center, shape->radius, v3(0.0f, 1.0f, 0.0f), normal);
+		return plait_shape_distance(shape, p, normal); /* inline in shape.h */
 	case PLAIT_SHAPE_CAPSULE: {
 		vec3 ab = v3_sub(shape->b, shape->a);
 		float length_sq = v3_length_sq(ab);
@@ -126,48 +125,11 @@ bool plait_shape_bounds(const plait_shape *shape, vec3 *lower, vec3 *upper)
 	}
 }
 
-bool plait_shape_sweep(const plait_shape *shape, vec3 p0, vec3 p1, float radius, float *toi)
+bool plait_shape_sweep_general(const plait_shape *shape, vec3 p0, vec3 p1, float radius, float *toi)
 {
+	/* Planes and spheres are solved exactly in shape.h. */
 	vec3 normal;
 	vec3 motion = v3_sub(p1, p0);
-	if (shape->type == PLAIT_SHAPE_PLANE) {
-		/* Exact for a plane: distance is linear in t. */
-		float d0 = v3_dot(shape->normal, v3_sub(p0, shape->point)) - radius;
-		float d1 = v3_dot(shape->normal, v3_sub(p1, shape->point)) - radius;
-		if (d0 <= 0.0f) {
-			*toi = 0.0f;
-			return true;
-		}
-		if (d1 > 0.0f) {
-			return false;
-		}
-		*toi = d0 / (d0 - d1);
-		return true;
-	}
-	if (shape->type == PLAIT_SHAPE_SPHERE) {
-		/* Exact for a sphere: |p0 + t d - c| = R is a quadratic in t. */
-		vec3 m = v3_sub(p0, shape->center);
-		float reach = shape->radius + radius;
-		float c = v3_dot(m, m) - reach * reach;
-		if (c <= 0.0f) {
-			*toi = 0.0f;
-			return true;
-		}
-		float a = v3_dot(motion, motion), b = v3_dot(m, motion);
-		if (a <= 0.0f || b >= 0.0f) {
-			return false;
-		}
-		float discriminant = b * b - a * c;
-		if (discriminant < 0.0f) {
-			return false;
-		}
-		float t_hit = (-b - sqrtf(discriminant)) / a;
-		if (t_hit > 1.0f) {
-			return false;
-		}
-		*toi = t_hit > 0.0f ? t_hit : 0.0f;
-		return true;
-	}
 	float travel = v3_length(motion);
 	/* Stop advancing within a small fraction of the radius (or of the path for radius 0). */
 	float tolerance = plait_maxf(1e-3f * radius, 1e-6f * (travel + 1.0f));

@@ -380,6 +380,8 @@ typedef struct collider_job {
 	vec3 world_lower, world_upper; /* box of the collider over the substep, grown */
 	vec3 ball_centre;              /* a ball holding the collider over the substep, grown */
 	float ball_radius;
+	bool still;         /* the same placement at both ends of the substep: surface velocity zero */
+	bool identity;      /* still, and shape space is world space: no transforms at all */
 	const int *indices; /* the particles to test, or NULL for all */
 	_Atomic int contacts;
 } collider_job;
@@ -418,8 +420,9 @@ static void collide_collider_range(void *context, int begin, int end)
 		const plait_material *mat = &sim->materials[p->material[i]];
 		/* Everything in the collider's own space: there the collider stands still and the
 		 * particle moves along a straight line from p0 to p1. */
-		vec3 p0 = plait_rigid_apply_inverse(r0, p->x_prev[i]);
-		vec3 p1 = plait_rigid_apply_inverse(r1, p->point[i].x);
+		bool identity = job->identity;
+		vec3 p0 = identity ? p->x_prev[i] : plait_rigid_apply_inverse(r0, p->x_prev[i]);
+		vec3 p1 = identity ? p->point[i].x : plait_rigid_apply_inverse(r1, p->point[i].x);
 		float radius = (p->radius[i] + c->thickness) * inverse_scale;
 		if (c->shape.type == PLAIT_SHAPE_MESH) {
 			vec3 normal, motion;
@@ -452,9 +455,12 @@ static void collide_collider_range(void *context, int begin, int end)
 		}
 		vec3 surface = v3_mul_add(hit, -distance, normal);
 		float depth = radius - v3_dot(v3_sub(p1, surface), normal);
-		vec3 surface_world = plait_rigid_apply(r1, surface);
-		vec3 surface_velocity = v3_scale(v3_sub(surface_world, plait_rigid_apply(r0, surface)), inverse_h);
-		vec3 normal_world = plait_rigid_rotate(r1, normal);
+		vec3 surface_velocity = v3(0.0f, 0.0f, 0.0f);
+		if (!job->still) {
+			vec3 surface_world = plait_rigid_apply(r1, surface);
+			surface_velocity = v3_scale(v3_sub(surface_world, plait_rigid_apply(r0, surface)), inverse_h);
+		}
+		vec3 normal_world = identity ? normal : plait_rigid_rotate(r1, normal);
 		float bounce = 0.5f * (mat->bounce + c->bounce);
 		float stickiness = 0.5f * (mat->stickiness + c->stickiness);
 		if (depth <= 0.0f) {
@@ -465,7 +471,7 @@ static void collide_collider_range(void *context, int begin, int end)
 		}
 		float friction = plait_combined_friction(mat->friction, c->friction);
 		vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
-		p->point[i].x = plait_rigid_apply(r1, v3_add(p1, correction));
+		p->point[i].x = identity ? v3_add(p1, correction) : plait_rigid_apply(r1, v3_add(p1, correction));
 		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
 		if (c->shape.type == PLAIT_SHAPE_PLANE) {
 			p->flags[i] |= PLAIT_PARTICLE_ON_PLANE;
@@ -514,7 +520,17 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c, const 
 	vec3 ball_centre = v3_scale(v3_add(centre0, centre1), 0.5f);
 	float ball_radius = radius * plait_maxf(r0->scale, r1->scale) +
 	                    0.5f * v3_length(v3_sub(centre1, centre0)) + sim->largest_radius + c->thickness;
-	collider_job job = {sim, c, bounded, world_lower, world_upper, ball_centre, ball_radius, indices, 0};
+	bool still = memcmp(r0, r1, sizeof *r0) == 0;
+	const plait_rigid *r = r1;
+	bool identity = still && r->scale == 1.0f && r->translate.x == 0.0f && r->translate.y == 0.0f &&
+	                r->translate.z == 0.0f;
+	for (int row = 0; row < 3 && identity; ++row) {
+		for (int column = 0; column < 3; ++column) {
+			identity = identity && r->rotation.m[row][column] == (row == column ? 1.0f : 0.0f);
+		}
+	}
+	collider_job job = {sim,      c,       bounded, world_lower, world_upper, ball_centre, ball_radius, still,
+	                    identity, indices, 0};
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
 	return atomic_load_explicit(&job.contacts, memory_order_relaxed);
