@@ -216,10 +216,6 @@ void plait_integrate_velocities(plait_sim *sim, float h, bool air, int begin, in
 		} else {
 			v = v3_mul_add(v, h, gravity);
 		}
-		float damp = sim->materials[p->material[i]].damp;
-		if (damp > 0.0f) {
-			v = v3_scale(v, expf(-damp * h));
-		}
-		p->v[i] = v;
+		p->v[i] = plait_damp_velocity(v, sim->materials[p->material[i]].damp, h);
 	}
 }

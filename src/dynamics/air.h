@@ -23,6 +23,8 @@
 #ifndef PLAIT_DYNAMICS_AIR_H
 #define PLAIT_DYNAMICS_AIR_H
 
+#include <math.h>
+
 #include "dynamics/sim.h"
 
 /* Whether any object feels the air (decides whether the air stage runs at all). */
@@ -33,5 +35,11 @@ void plait_air_accumulate(plait_sim *sim, double time);
 
 /* v <- velocity after gravity, air and damping over h, for every free particle. */
 void plait_integrate_velocities(plait_sim *sim, float h, bool air, int begin, int end);
+
+/* Damping at rate damp (1/s) over h: exact exponential decay. */
+static inline vec3 plait_damp_velocity(vec3 v, float damp, float h)
+{
+	return damp > 0.0f ? v3_scale(v, expf(-damp * h)) : v;
+}
 
 #endif

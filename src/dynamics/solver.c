@@ -1,5 +1,6 @@
 #include "dynamics/solver.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "core/clock.h"
@@ -81,16 +82,26 @@ static void begin_substep_range(void *context, int begin, int end)
 	plait_sim *sim = job->sim;
 	plait_particles *p = &sim->particles;
 	float h = job->h;
-	plait_integrate_velocities(sim, h, job->air, begin, end);
 	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
+	if (job->air) {
+		plait_integrate_velocities(sim, h, true, begin, end);
+	}
+	vec3 gravity = sim->settings.gravity;
 	for (int i = begin; i < end; ++i) {
 		p->x_prev[i] = p->point[i].x;
-		p->v_pre[i] = p->v[i];
 		if (p->point[i].w == 0.0f) {
+			p->v_pre[i] = p->v[i];
 			p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], job->t_end);
-		} else {
-			p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(p->v[i], half_gravity_step));
+			continue;
 		}
+		/* Without air, plait_integrate_velocities in the same pass: gravity and damping. */
+		vec3 v = p->v[i];
+		if (!job->air) {
+			v = plait_damp_velocity(v3_mul_add(v, h, gravity), sim->materials[p->material[i]].damp, h);
+			p->v[i] = v;
+		}
+		p->v_pre[i] = v;
+		p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(v, half_gravity_step));
 	}
 }
 
