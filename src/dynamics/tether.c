@@ -214,6 +214,50 @@ static __attribute__((noinline)) void project_row_exactly(const plait_tether_blo
 	}
 }
 
+static inline bool within_reach(vec3 q, vec3 anchor, float length)
+{
+	float reach = length * (1.0f + (float)INSIDE_TOLERANCE);
+	return v3_length_sq(v3_sub(q, anchor)) <= reach * reach;
+}
+
+/* Two tethers, p outside w's reach and its projection onto w outside o's: the nearest point of
+ * the two balls is p's projection onto o if that lies within w's reach, else the nearest point
+ * of the circle where the spheres meet. Tried in float, and kept only if it checks out within
+ * both reaches: a thin lens (a small circle, from a difference of squares) loses too many
+ * digits in float and is left to the exact search in double. */
+static inline bool nearest_in_two_balls(vec3 p, vec3 w, float w_length, vec3 o, float o_length, vec3 *out)
+{
+	vec3 from_o = v3_sub(p, o);
+	float o_distance_sq = v3_length_sq(from_o);
+	if (o_distance_sq > o_length * o_length) {
+		vec3 q = v3_mul_add(o, o_length / sqrtf(o_distance_sq), from_o);
+		if (within_reach(q, w, w_length)) {
+			*out = q;
+			return true;
+		}
+	}
+	vec3 d = v3_sub(o, w);
+	float d_sq = v3_length_sq(d);
+	if (!(d_sq > 0.0f)) {
+		return false;
+	}
+	float along = 0.5f * (1.0f + (w_length * w_length - o_length * o_length) / d_sq); /* share of d */
+	float radius_sq = w_length * w_length - along * along * d_sq;
+	vec3 centre = v3_mul_add(w, along, d);
+	vec3 offset = v3_sub(p, centre);
+	vec3 in_plane = v3_mul_add(offset, -v3_dot(offset, d) / d_sq, d);
+	float in_plane_length = v3_length(in_plane);
+	if (!(radius_sq > 0.0f) || !(in_plane_length > 1e-12f)) {
+		return false;
+	}
+	vec3 q = v3_mul_add(centre, sqrtf(radius_sq) / in_plane_length, in_plane);
+	if (!within_reach(q, w, w_length) || !within_reach(q, o, o_length)) {
+		return false;
+	}
+	*out = q;
+	return true;
+}
+
 static inline void project_row(const plait_tether_block *block, plait_point *points, int first, int end)
 {
 	plait_point *p = &points[block->pair[first][0]];
@@ -245,6 +289,11 @@ static inline void project_row(const plait_tether_block *block, plait_point *poi
 	for (int c = first; c < end && within; ++c) {
 		float reach = block->length[c] * (1.0f + (float)INSIDE_TOLERANCE);
 		within = c == worst || v3_length_sq(v3_sub(projected, points[block->pair[c][1]].x)) <= reach * reach;
+	}
+	if (!within && end - first == 2) {
+		int other = worst == first ? first + 1 : first;
+		within = nearest_in_two_balls(p->x, anchor, block->length[worst], points[block->pair[other][1]].x,
+		                              block->length[other], &projected);
 	}
 	if (within) {
 		/* One stiffness per cloth: the row's tethers share it. */
