@@ -179,6 +179,15 @@ static hang_result run_hang(int n, const hang_options *options)
 			result.nonfinite = 1;
 			break;
 		}
+		if (getenv("HANG_FAST") && frame >= atoi(getenv("HANG_FAST"))) {
+			plait_vec3 *xx = malloc(sizeof *xx * (size_t)vertex_count), *vv = malloc(sizeof *vv * (size_t)vertex_count);
+			plait_object_get_positions(cloth_id, 0, vertex_count, xx, NULL);
+			plait_object_get_velocities(cloth_id, 0, vertex_count, vv, NULL);
+			int best = 0; double bs = 0;
+			for (int v = 0; v < vertex_count; ++v) { double sp = sqrt(vv[v].x*vv[v].x + vv[v].y*vv[v].y + vv[v].z*vv[v].z); if (sp > bs) { bs = sp; best = v; } }
+			fprintf(stderr, "frame %d fastest i=%d j=%d speed %.2f at (%.3f %.3f %.3f) v (%.2f %.2f %.2f) r %.4f\n", frame, best % n, best / n, bs, xx[best].x, xx[best].y, xx[best].z, vv[best].x, vv[best].y, vv[best].z, sqrt(xx[best].x*xx[best].x + (xx[best].y+0.75)*(xx[best].y+0.75) + xx[best].z*xx[best].z));
+			free(xx); free(vv);
+		}
 	}
 	result.ms_per_frame = 1000.0 * (now_seconds() - start) / options->frames;
 	result.bytes_per_vertex = allocated_bytes / (size_t)vertex_count;

@@ -20,19 +20,26 @@
  * closes an odd count with a symmetric one, so every substep applies whole symmetric sweeps,
  * whose error operator has real eigenvalues in [0, 1). A kind that runs once per substep (many
  * substeps, the cheapest way to stiffness) sweeps forward in even substeps and backward in odd
- * ones instead: each pair of substeps is then one symmetric sweep, at half the cost (stable in
- * 1000 random runs of tests/test_stability.c; hang-128 stiff at 10 substeps: 18 -> 10 ms with
- * strain p99 0.070 -> 0.081, and 16 substeps of single sweeps beat 10 of symmetric ones). */
+ * ones instead: each pair of substeps is then one symmetric sweep, at half the cost (hang-128
+ * stiff at 10 substeps: 18 -> 10 ms). Except stretch, the load-bearing kind: alternating its
+ * direction ends every other substep with the edges next to a pin stretched, a period-2
+ * oscillation that the velocity update feeds; a heavy rigid cloth hung without tethers blew up
+ * at 16 and at 32 substeps (tests/test_stability.c, heavy_rigid_cloth_hangs_with_one_pass).
+ * Stretch run once per substep sweeps symmetrically; shear and bend still alternate. */
 typedef enum plait_sweep {
 	PLAIT_SWEEP_FORWARD,
 	PLAIT_SWEEP_BACKWARD,
 	PLAIT_SWEEP_SYMMETRIC, /* forward then backward */
 } plait_sweep;
 
-/* The sweep for iteration `iteration` of `count` of a kind in substep `substep`. */
-static inline plait_sweep plait_sweep_for(int iteration, int count, int substep)
+/* The sweep for iteration `iteration` of `count` of a kind in substep `substep`; a
+ * load-bearing kind (stretch) never alternates. */
+static inline plait_sweep plait_sweep_for(int iteration, int count, int substep, bool load_bearing)
 {
 	if (count == 1) {
+		if (load_bearing) {
+			return PLAIT_SWEEP_SYMMETRIC;
+		}
 		return (substep & 1) ? PLAIT_SWEEP_BACKWARD : PLAIT_SWEEP_FORWARD;
 	}
 	if ((iteration & 1) != 0) {

@@ -207,7 +207,8 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		}
 		for (int e = first; e < last; ++e) {
 			int k = schedule->events[e];
-			plait_sweep sweep = plait_sweep_for(done[k]++, in_substep[k], s);
+			plait_sweep sweep =
+			    plait_sweep_for(done[k]++, in_substep[k], s, sim->schedule_kinds[k] == PLAIT_KIND_STRETCH);
 			run_event(sim, (plait_kind)sim->schedule_kinds[k], inverse_h_squared, sweep);
 		}
 
