@@ -303,6 +303,101 @@ static inline void project_row(const plait_tether_block *block, plait_point *poi
 	}
 }
 
+/* Particles with two taut-or-slack tethers (a cloth hung from two pins: most of them) are
+ * solved a batch at a time, like project_row and nearest_in_two_balls but lane by lane over
+ * coordinate arrays with selects instead of branches, which the compiler vectorises; the same
+ * operations, so the same bits. A lane none of whose candidates checks out goes to
+ * project_row_exactly afterwards. */
+enum { PAIR_BATCH = 160 };
+
+typedef struct pair_batch {
+	int first[PAIR_BATCH]; /* the row's first tether */
+	float px[PAIR_BATCH], py[PAIR_BATCH], pz[PAIR_BATCH];
+	float ax[2][PAIR_BATCH], ay[2][PAIR_BATCH], az[2][PAIR_BATCH], length[2][PAIR_BATCH];
+	float stiffness[PAIR_BATCH];
+	/* Results: the new position, and whether it was found (else: the exact search). */
+	float qx[PAIR_BATCH], qy[PAIR_BATCH], qz[PAIR_BATCH];
+	int found[PAIR_BATCH];
+} pair_batch;
+
+static inline float pick(int condition, float a, float b)
+{
+	return condition ? a : b;
+}
+
+static inline vec3 pick3(int condition, vec3 a, vec3 b)
+{
+	return (vec3){condition ? a.x : b.x, condition ? a.y : b.y, condition ? a.z : b.z};
+}
+
+static inline int reaches(vec3 q, vec3 anchor, float length)
+{
+	float reach = length * (1.0f + (float)INSIDE_TOLERANCE);
+	return v3_length_sq(v3_sub(q, anchor)) <= reach * reach;
+}
+
+static void solve_pair_batch(pair_batch *restrict batch, int count)
+{
+	for (int k = 0; k < count; ++k) {
+		vec3 p = {batch->px[k], batch->py[k], batch->pz[k]};
+		vec3 a0 = {batch->ax[0][k], batch->ay[0][k], batch->az[0][k]};
+		vec3 a1 = {batch->ax[1][k], batch->ay[1][k], batch->az[1][k]};
+		float l0 = batch->length[0][k], l1 = batch->length[1][k];
+		vec3 d0 = v3_sub(p, a0), d1 = v3_sub(p, a1);
+		float d0_sq = v3_length_sq(d0), d1_sq = v3_length_sq(d1);
+		/* Excess, <= 0 when slack (sqrt of a rounded square gives the length back). */
+		float e0 = sqrtf(d0_sq) - l0, e1 = sqrtf(d1_sq) - l1;
+		/* project_row: the worst tether (the first on a tie), projected onto; none when both
+		 * excesses round to zero. */
+		int first_worst = (e0 > 0.0f) & (e0 >= e1);
+		int none = (e0 <= 0.0f) & (e1 <= 0.0f);
+		vec3 w = pick3(first_worst, a0, a1), o = pick3(first_worst, a1, a0);
+		float w_length = pick(first_worst, l0, l1), o_length = pick(first_worst, l1, l0);
+		vec3 d = pick3(first_worst, d0, d1);
+		vec3 projected = v3_mul_add(w, w_length / v3_length(d), d);
+		int within = reaches(projected, o, o_length);
+		/* nearest_in_two_balls: the projection onto the other, then the circle. */
+		vec3 from_o = v3_sub(p, o);
+		float o_distance_sq = v3_length_sq(from_o);
+		vec3 onto_o = v3_mul_add(o, o_length / sqrtf(o_distance_sq), from_o);
+		int onto_o_fits = (o_distance_sq > o_length * o_length) & reaches(onto_o, w, w_length);
+		vec3 axis = v3_sub(o, w);
+		float axis_sq = v3_length_sq(axis);
+		float safe_axis_sq = pick(axis_sq > 0.0f, axis_sq, 1.0f);
+		float along = 0.5f * (1.0f + (w_length * w_length - o_length * o_length) / safe_axis_sq);
+		float radius_sq = w_length * w_length - along * along * safe_axis_sq;
+		vec3 centre = v3_mul_add(w, along, axis);
+		vec3 offset = v3_sub(p, centre);
+		vec3 in_plane = v3_mul_add(offset, -v3_dot(offset, axis) / safe_axis_sq, axis);
+		float in_plane_length = v3_length(in_plane);
+		float safe_length = pick(in_plane_length > 1e-12f, in_plane_length, 1.0f);
+		vec3 on_circle =
+		    v3_mul_add(centre, sqrtf(pick(radius_sq > 0.0f, radius_sq, 0.0f)) / safe_length, in_plane);
+		int circle_fits = (axis_sq > 0.0f) & (radius_sq > 0.0f) & (in_plane_length > 1e-12f) &
+		                  reaches(on_circle, w, w_length) & reaches(on_circle, o, o_length);
+		vec3 q = pick3(within, projected, pick3(onto_o_fits, onto_o, on_circle));
+		q = pick3(none, p, v3_lerp(p, q, batch->stiffness[k]));
+		batch->qx[k] = q.x;
+		batch->qy[k] = q.y;
+		batch->qz[k] = q.z;
+		batch->found[k] = none | within | onto_o_fits | circle_fits;
+	}
+}
+
+static void finish_pair_batch(const plait_tether_block *block, plait_point *points, pair_batch *batch,
+                              int count)
+{
+	solve_pair_batch(batch, count);
+	for (int k = 0; k < count; ++k) {
+		int first = batch->first[k];
+		if (batch->found[k]) {
+			points[block->pair[first][0]].x = v3(batch->qx[k], batch->qy[k], batch->qz[k]);
+		} else {
+			project_row_exactly(block, points, first, first + 2);
+		}
+	}
+}
+
 typedef struct tether_job {
 	plait_tether_block *block;
 	plait_point *points;
@@ -333,6 +428,8 @@ static void tether_range(void *context, int begin, int end)
 	 * particle changes no other's test: anchors are pins. */
 	enum { CHUNK = 256 };
 	uint8_t taut[CHUNK + MAX_ROW];
+	pair_batch pair_lanes; /* a chunk holds at most (CHUNK + MAX_ROW) / 2 rows of two */
+	int pairs = 0;
 	for (int chunk = begin, chunk_end; chunk < end; chunk = chunk_end) {
 		/* Chunks end where a row does: each particle is tested and projected once. */
 		chunk_end = chunk + CHUNK < end ? chunk + CHUNK : end;
@@ -358,7 +455,24 @@ static void tether_range(void *context, int begin, int end)
 			while (row_end < chunk_end && block->pair[row_end][0] == particle) {
 				++row_end;
 			}
-			if (row_end - first == 1 || row_end - first > MAX_ROW) {
+			if (row_end - first == 2) {
+				if (points[particle].w != 0.0f) {
+					int lane = pairs++;
+					pair_lanes.first[lane] = first;
+					vec3 x = points[particle].x;
+					pair_lanes.px[lane] = x.x;
+					pair_lanes.py[lane] = x.y;
+					pair_lanes.pz[lane] = x.z;
+					for (int m = 0; m < 2; ++m) {
+						vec3 a = points[block->pair[first + m][1]].x;
+						pair_lanes.ax[m][lane] = a.x;
+						pair_lanes.ay[m][lane] = a.y;
+						pair_lanes.az[m][lane] = a.z;
+						pair_lanes.length[m][lane] = block->length[first + m];
+					}
+					pair_lanes.stiffness[lane] = block->stiffness[first];
+				}
+			} else if (row_end - first == 1 || row_end - first > MAX_ROW) {
 				for (int k = first; k < row_end; ++k) {
 					project_tether(block, points, k);
 				}
@@ -366,6 +480,10 @@ static void tether_range(void *context, int begin, int end)
 				project_row(block, points, first, row_end);
 			}
 			c = row_end - 1;
+		}
+		if (pairs > 0) {
+			finish_pair_batch(block, points, &pair_lanes, pairs);
+			pairs = 0;
 		}
 	}
 }
