@@ -346,7 +346,8 @@ static void solve_pair_batch(pair_batch *restrict batch, int count)
 		vec3 d0 = v3_sub(p, a0), d1 = v3_sub(p, a1);
 		float d0_sq = v3_length_sq(d0), d1_sq = v3_length_sq(d1);
 		/* Excess, <= 0 when slack (sqrt of a rounded square gives the length back). */
-		float e0 = sqrtf(d0_sq) - l0, e1 = sqrtf(d1_sq) - l1;
+		float r0 = sqrtf(d0_sq), r1 = sqrtf(d1_sq);
+		float e0 = r0 - l0, e1 = r1 - l1;
 		/* project_row: the worst tether (the first on a tie), projected onto; none when both
 		 * excesses round to zero. */
 		int first_worst = (e0 > 0.0f) & (e0 >= e1);
@@ -354,12 +355,12 @@ static void solve_pair_batch(pair_batch *restrict batch, int count)
 		vec3 w = pick3(first_worst, a0, a1), o = pick3(first_worst, a1, a0);
 		float w_length = pick(first_worst, l0, l1), o_length = pick(first_worst, l1, l0);
 		vec3 d = pick3(first_worst, d0, d1);
-		vec3 projected = v3_mul_add(w, w_length / v3_length(d), d);
+		vec3 projected = v3_mul_add(w, w_length / pick(first_worst, r0, r1), d); /* r: |d| */
 		int within = reaches(projected, o, o_length);
 		/* nearest_in_two_balls: the projection onto the other, then the circle. */
-		vec3 from_o = v3_sub(p, o);
-		float o_distance_sq = v3_length_sq(from_o);
-		vec3 onto_o = v3_mul_add(o, o_length / sqrtf(o_distance_sq), from_o);
+		vec3 from_o = pick3(first_worst, d1, d0);
+		float o_distance_sq = pick(first_worst, d1_sq, d0_sq);
+		vec3 onto_o = v3_mul_add(o, o_length / pick(first_worst, r1, r0), from_o);
 		int onto_o_fits = (o_distance_sq > o_length * o_length) & reaches(onto_o, w, w_length);
 		vec3 axis = v3_sub(o, w);
 		float axis_sq = v3_length_sq(axis);
