@@ -17,6 +17,16 @@ typedef struct mat3 {
 
 #define PLAIT_PI 3.14159265358979323846f
 
+/* For loops written to be vectorised (lane by lane over arrays, selects instead of branches):
+ * an AVX2 copy besides the baseline one, picked when the program loads. Lanes do the same
+ * IEEE operations either way (no contraction into FMA), so the results are the same bits. */
+#if PLAIT_X86_KERNELS && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) &&                   \
+    !defined(__SANITIZE_ADDRESS__)
+#define PLAIT_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PLAIT_VECTOR_CLONES
+#endif
+
 /* Plain comparisons: fmaxf/fminf must honour NaN rules and become library calls in hot loops. */
 static inline float plait_maxf(float a, float b)
 {

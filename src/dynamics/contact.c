@@ -431,7 +431,8 @@ static inline vec3 select_vec3(int condition, vec3 a, vec3 b)
 	return (vec3){condition ? a.x : b.x, condition ? a.y : b.y, condition ? a.z : b.z};
 }
 
-static void solve_sphere_batch(sphere_batch *restrict batch, int count, vec3 centre, float sphere_radius)
+PLAIT_VECTOR_CLONES static void solve_sphere_batch(sphere_batch *restrict batch, int count, vec3 centre,
+                                                   float sphere_radius)
 {
 	for (int k = 0; k < count; ++k) {
 		vec3 p0 = lane_get(&batch->p0, k), p1 = lane_get(&batch->p1, k);

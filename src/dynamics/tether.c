@@ -336,7 +336,7 @@ static inline int reaches(vec3 q, vec3 anchor, float length)
 	return v3_length_sq(v3_sub(q, anchor)) <= reach * reach;
 }
 
-static void solve_pair_batch(pair_batch *restrict batch, int count)
+PLAIT_VECTOR_CLONES static void solve_pair_batch(pair_batch *restrict batch, int count)
 {
 	for (int k = 0; k < count; ++k) {
 		vec3 p = {batch->px[k], batch->py[k], batch->pz[k]};
