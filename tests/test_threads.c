@@ -404,7 +404,12 @@ Test(threads, hang_128_example_scene_loads, .timeout = 300)
 	cr_expect_float_eq(cloth->cloth.density * 4.0f, 16384.0f, 1e-3f);
 	cr_expect_float_eq(cloth->cloth.stretch_resistance, 10000.0f, 0.0f);
 	cr_expect_float_eq(cloth->cloth.compression_resistance, 10000.0f, 0.0f);
-	cr_expect_eq(cloth->cloth.iterations, 20);
+	// The comparison's constraint set: shear and skip-one bend edges, rigid, once per substep.
+	cr_expect_float_eq(cloth->cloth.shear_resistance, 10000.0f, 0.0f);
+	cr_expect_float_eq(cloth->cloth.bend_resistance, 10000.0f, 0.0f);
+	cr_expect_eq(cloth->cloth.bend_model, PLAIT_BEND_DISTANCE);
+	cr_expect_eq(scene.world.substeps, 6);
+	cr_expect_eq(cloth->cloth.iterations, 6);
 	cr_expect_eq(cloth->cloth.tethers, PLAIT_TETHER_EUCLIDEAN);
 	const plait_scene_object *sphere = &scene.objects[1];
 	cr_expect_eq(sphere->type, PLAIT_OBJECT_COLLIDER);
