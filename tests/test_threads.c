@@ -306,6 +306,61 @@ Test(threads, same_positions_with_1_2_and_8_workers, .timeout = 600)
 	free(x8);
 }
 
+/* A cloth tethered to three pins (rows of three tethers per vertex, solved exactly, which
+ * straddle the workers' ranges of 2048 tethers) and hung over a sphere: tethers are split
+ * between workers by particle rows, never inside one. */
+static plait_vec3 *tethered_positions(int worker_count, int *count)
+{
+	plait_thread_pool *pool = NULL;
+	if (worker_count > 1) {
+		pool = plait_thread_pool_create(worker_count);
+		cr_assert_not_null(pool);
+	}
+	plait_world_def wdef = plait_default_world_def();
+	wdef.substeps = 4;
+	plait_thread_pool_attach(pool, &wdef);
+	plait_error error = {0};
+	plait_world_id world = plait_create_world(&wdef, &error);
+	cr_assert(!plait_world_id_is_null(world), "%s", error.message);
+	int n = 90;
+	test_grid grid = test_grid_make(n, n, 2.0f, 2.0f);
+	int pins[3] = {0, n, (n / 2) * (n + 1)};
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
+	cloth.pins = pins;
+	cloth.pin_count = 3;
+	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
+	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_SPHERE;
+	sphere.center = (plait_vec3){0.2f, -0.6f, 0.3f};
+	sphere.radius = 0.5f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
+	cr_assert(test_step_frames(world, 20));
+	*count = grid.vertex_count;
+	plait_vec3 *x = malloc(sizeof *x * (size_t)*count);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, x, &error), PLAIT_OK, "%s", error.message);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+	plait_thread_pool_destroy(pool);
+	return x;
+}
+
+Test(threads, tethered_cloth_same_with_1_2_and_8_workers, .timeout = 600)
+{
+	int count1, count2, count8;
+	plait_vec3 *x1 = tethered_positions(1, &count1);
+	plait_vec3 *x2 = tethered_positions(2, &count2);
+	plait_vec3 *x8 = tethered_positions(8, &count8);
+	cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0, "2 workers give other positions than 1");
+	cr_expect(memcmp(x1, x8, sizeof *x1 * (size_t)count1) == 0, "8 workers give other positions than 1");
+	free(x1);
+	free(x2);
+	free(x8);
+}
+
 /* ---- plait run --threads -------------------------------------------------------------------- */
 
 Test(threads, run_rejects_bad_thread_counts)

@@ -21,7 +21,7 @@ typedef struct mat3 {
  * an AVX2 copy besides the baseline one, picked when the program loads. Lanes do the same
  * IEEE operations either way (no contraction into FMA), so the results are the same bits. */
 #if PLAIT_X86_KERNELS && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) &&                   \
-    !defined(__SANITIZE_ADDRESS__)
+    defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__) /* ifunc: glibc only */
 #define PLAIT_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define PLAIT_VECTOR_CLONES

@@ -659,17 +659,21 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c, const 
 	}
 	/* The shape's bounding ball (exact for a sphere) where it is at the substep's middle, grown
 	 * by half its centre's travel: it holds the collider over the whole substep. Rotation
-	 * about the centre moves nothing out of it. */
-	vec3 centre = v3_scale(v3_add(lower0, upper0), 0.5f);
-	float radius =
-	    c->shape.type == PLAIT_SHAPE_SPHERE ? c->shape.radius : 0.5f * v3_length(v3_sub(upper0, lower0));
-	if (c->shape.type == PLAIT_SHAPE_SPHERE) {
-		centre = c->shape.center;
+	 * about the centre moves nothing out of it. A relative margin keeps rounding from
+	 * dropping a grazing contact. (Unbounded shapes are not culled.) */
+	vec3 ball_centre = {0};
+	float ball_radius = INFINITY;
+	if (bounded) {
+		vec3 centre =
+		    c->shape.type == PLAIT_SHAPE_SPHERE ? c->shape.center : v3_scale(v3_add(lower0, upper0), 0.5f);
+		float radius =
+		    c->shape.type == PLAIT_SHAPE_SPHERE ? c->shape.radius : 0.5f * v3_length(v3_sub(upper0, lower0));
+		vec3 centre0 = plait_rigid_apply(r0, centre), centre1 = plait_rigid_apply(r1, centre);
+		ball_centre = v3_scale(v3_add(centre0, centre1), 0.5f);
+		ball_radius = radius * plait_maxf(r0->scale, r1->scale) + 0.5f * v3_length(v3_sub(centre1, centre0)) +
+		              sim->largest_radius + c->thickness;
+		ball_radius = ball_radius * (1.0f + 1e-5f) + 1e-6f;
 	}
-	vec3 centre0 = plait_rigid_apply(r0, centre), centre1 = plait_rigid_apply(r1, centre);
-	vec3 ball_centre = v3_scale(v3_add(centre0, centre1), 0.5f);
-	float ball_radius = radius * plait_maxf(r0->scale, r1->scale) +
-	                    0.5f * v3_length(v3_sub(centre1, centre0)) + sim->largest_radius + c->thickness;
 	bool still = memcmp(r0, r1, sizeof *r0) == 0;
 	const plait_rigid *r = r1;
 	bool identity = still && r->scale == 1.0f && r->translate.x == 0.0f && r->translate.y == 0.0f &&

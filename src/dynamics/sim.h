@@ -152,7 +152,11 @@ typedef struct plait_rod_bend_block {
 	float *lambda;
 } plait_rod_bend_block;
 
-/* Tethers: particle pair[c][0] stays within length[c] of its anchor pair[c][1]. */
+/* Pins a free vertex is tethered to, at most (its nearest ones; world/tethers.c). */
+#define PLAIT_TETHER_ANCHORS 4
+
+/* Tethers: particle pair[c][0] stays within length[c] of its anchor pair[c][1]. A particle's
+ * tethers are consecutive (a row of at most PLAIT_TETHER_ANCHORS). */
 typedef struct plait_tether_block {
 	int count, capacity;
 	int (*pair)[2];

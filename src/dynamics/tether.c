@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #define TETHER_GRAIN 2048
+_Static_assert(PLAIT_TETHER_ANCHORS <= 8, "a particle's tethers must fit a chunk's slack (MAX_ROW)");
 #define MAX_ROW 8             /* tethers of one particle handled exactly; more are projected in turn */
 #define INSIDE_TOLERANCE 1e-6 /* relative to a ball's radius, for rounding in the candidates */
 
@@ -415,7 +416,10 @@ static void tether_range(void *context, int begin, int end)
 	while (begin > 0 && begin < end && block->pair[begin][0] == block->pair[begin - 1][0]) {
 		++begin;
 	}
-	while (end < block->count && end > 0 && block->pair[end][0] == block->pair[end - 1][0]) {
+	if (begin >= end) {
+		return; /* inside one particle's row: the range holding its start takes it */
+	}
+	while (end < block->count && block->pair[end][0] == block->pair[end - 1][0]) {
 		++end;
 	}
 	if (!job->fixed_anchors) {
@@ -434,9 +438,8 @@ static void tether_range(void *context, int begin, int end)
 	for (int chunk = begin, chunk_end; chunk < end; chunk = chunk_end) {
 		/* Chunks end where a row does: each particle is tested and projected once. */
 		chunk_end = chunk + CHUNK < end ? chunk + CHUNK : end;
-		while (chunk_end < end && chunk_end - chunk < CHUNK + MAX_ROW &&
-		       block->pair[chunk_end][0] == block->pair[chunk_end - 1][0]) {
-			++chunk_end;
+		while (chunk_end < end && block->pair[chunk_end][0] == block->pair[chunk_end - 1][0]) {
+			++chunk_end; /* at most MAX_ROW - 1 more: rows are that short */
 		}
 		for (int c = chunk; c < chunk_end; ++c) {
 			vec3 d = v3_sub(points[block->pair[c][0]].x, points[block->pair[c][1]].x);

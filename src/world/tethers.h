@@ -5,9 +5,6 @@
 #include "dynamics/sim.h"
 #include "topology/topology.h"
 
-/* Pins each free vertex is tethered to, at most (the nearest ones). */
-#define PLAIT_TETHER_ANCHORS 4
-
 /* Tethers per free vertex for a cloth with pin_count pins: room to reserve is this times the
  * vertex count. */
 int plait_tethers_per_vertex(int pin_count);
