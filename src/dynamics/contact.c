@@ -71,17 +71,26 @@ static bool materials_pair_up(const plait_material *a, const plait_material *b)
 	return a->type == PLAIT_OBJECT_PARTICLES && a->self_collide;
 }
 
-bool plait_contacts_begin_substep(plait_sim *sim)
+/* What rested on a plane collider in the last substep is held by it in this one (see
+ * surface_contact.c); contacts of this substep start afresh. Particles are independent here,
+ * so ranges of them run on the workers. */
+static void clear_contact_flags(void *context, int begin, int end)
 {
-	plait_particles *p = &sim->particles;
-	/* What rested on a plane collider in the last substep is held by it in this one (see
-	 * surface_contact.c); contacts of this substep start afresh. */
-	for (int i = 0; i < p->count; ++i) {
+	plait_particles *p = &((plait_sim *)context)->particles;
+	for (int i = begin; i < end; ++i) {
 		uint8_t flags = p->flags[i] & (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED |
 		                                          PLAIT_PARTICLE_ON_PLANE);
 		p->flags[i] =
 		    (p->flags[i] & PLAIT_PARTICLE_ON_PLANE) ? (uint8_t)(flags | PLAIT_PARTICLE_SUPPORTED) : flags;
 	}
+}
+
+#define FLAG_GRAIN 4096
+
+bool plait_contacts_begin_substep(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	plait_parallel_for(&sim->parallel, clear_contact_flags, sim, 0, p->count, FLAG_GRAIN);
 	sim->pair_contact_count = 0;
 	if (!plait_mesh_contacts_prepare(sim, &sim->mesh_contacts_active)) {
 		return false;
@@ -904,13 +913,20 @@ int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int 
 	return contacts;
 }
 
-void plait_contacts_end_substep(plait_sim *sim)
+/* Below this approach speed a contact is resting, not bouncing: gravity's pull over two
+ * substeps, so resting particles do not jitter. */
+static float resting_speed_of(const plait_sim *sim)
 {
+	return 2.0f * v3_length(sim->settings.gravity) * sim->substep_time + 1e-6f;
+}
+
+/* Restitution and stickiness of collider contacts: each particle on its own, on the workers. */
+static void respond_to_collider_contacts(void *context, int begin, int end)
+{
+	plait_sim *sim = context;
 	plait_particles *p = &sim->particles;
-	/* Below this approach speed a contact is resting, not bouncing: gravity's pull over two
-	 * substeps, so resting particles do not jitter. */
-	float resting_speed = 2.0f * v3_length(sim->settings.gravity) * sim->substep_time + 1e-6f;
-	for (int i = 0; i < p->count; ++i) {
+	float resting_speed = resting_speed_of(sim);
+	for (int i = begin; i < end; ++i) {
 		if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) || p->point[i].w == 0.0f) {
 			continue;
 		}
@@ -929,6 +945,13 @@ void plait_contacts_end_substep(plait_sim *sim)
 			p->v[i] = v3_mul_add(p->v[i], -normal_speed * p->contact_stickiness[i], n);
 		}
 	}
+}
+
+void plait_contacts_end_substep(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	plait_parallel_for(&sim->parallel, respond_to_collider_contacts, sim, 0, p->count, FLAG_GRAIN);
+	float resting_speed = resting_speed_of(sim);
 	for (int c = 0; c < sim->pair_contact_count; ++c) {
 		const plait_particle_contact *contact = &sim->pair_contacts[c];
 		int i = contact->i, j = contact->j;
