@@ -363,8 +363,14 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 				}
 			}
 		} else if (depth + 2 <= 64) {
-			stack[depth++] = n->first + 1;
-			stack[depth++] = n->first;
+			/* The nearer child first (pushed last): its triangles tighten the bound that
+			 * prunes the other. */
+			const plait_bvh_node *left = &shape->nodes[n->first], *right = &shape->nodes[n->first + 1];
+			float to_left = v3_length_sq(v3_sub(v3_max(left->lower, v3_min(p, left->upper)), p));
+			float to_right = v3_length_sq(v3_sub(v3_max(right->lower, v3_min(p, right->upper)), p));
+			bool left_first = to_left <= to_right;
+			stack[depth++] = left_first ? n->first + 1 : n->first;
+			stack[depth++] = left_first ? n->first : n->first + 1;
 		}
 	}
 	if (best < 0) {
