@@ -1,4 +1,5 @@
-/* Static intersection tests, for checking results (not for the solver). */
+/* Static intersection tests: for checking results, and the segment test for paths against a
+ * rigid mesh (collision/static_sweep.c). */
 #ifndef PLAIT_COLLISION_INTERSECT_H
 #define PLAIT_COLLISION_INTERSECT_H
 
