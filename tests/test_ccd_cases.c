@@ -614,25 +614,12 @@ Test(ccd_cases, degenerate_primitives)
 
 #include "collision/mesh_shape.h"
 #include "collision/static_sweep.h"
+#include "test_support.h"
 
 static float triangle_distance(vec3 p, vec3 a, vec3 b, vec3 c)
 {
 	int region;
 	return v3_length(v3_sub(p, plait_closest_point_on_triangle(p, a, b, c, &region, NULL)));
-}
-
-static uint32_t static_random(uint32_t *state)
-{
-	uint32_t x = *state;
-	x ^= x << 13;
-	x ^= x >> 17;
-	x ^= x << 5;
-	return *state = x;
-}
-
-static float static_uniform(uint32_t *state, float low, float high)
-{
-	return low + (high - low) * (float)(static_random(state) & 0xFFFFFF) / (float)0xFFFFFF;
 }
 
 /* Random paths near random triangles, at three scales: a path that comes within the radius
@@ -645,17 +632,17 @@ Test(ccd_cases, static_triangle_sweep_never_misses)
 	int hits = 0, misses = 0;
 	for (int n = 0; n < 6000; ++n) {
 		float s = scales[n % 3];
-		vec3 a = {static_uniform(&state, -s, s), static_uniform(&state, -s, s), static_uniform(&state, -s, s)};
-		vec3 b = {static_uniform(&state, -s, s), static_uniform(&state, -s, s), static_uniform(&state, -s, s)};
-		vec3 c = {static_uniform(&state, -s, s), static_uniform(&state, -s, s), static_uniform(&state, -s, s)};
+		vec3 a = {test_uniform(&state, -s, s), test_uniform(&state, -s, s), test_uniform(&state, -s, s)};
+		vec3 b = {test_uniform(&state, -s, s), test_uniform(&state, -s, s), test_uniform(&state, -s, s)};
+		vec3 c = {test_uniform(&state, -s, s), test_uniform(&state, -s, s), test_uniform(&state, -s, s)};
 		if (n % 7 == 0) {
 			c = v3_lerp(a, b, 0.5f); /* degenerate: a segment */
 		}
-		vec3 p0 = {static_uniform(&state, -2 * s, 2 * s), static_uniform(&state, -2 * s, 2 * s),
-		           static_uniform(&state, -2 * s, 2 * s)};
-		vec3 p1 = {static_uniform(&state, -2 * s, 2 * s), static_uniform(&state, -2 * s, 2 * s),
-		           static_uniform(&state, -2 * s, 2 * s)};
-		float radius = static_uniform(&state, 0.0f, 0.3f * s);
+		vec3 p0 = {test_uniform(&state, -2 * s, 2 * s), test_uniform(&state, -2 * s, 2 * s),
+		           test_uniform(&state, -2 * s, 2 * s)};
+		vec3 p1 = {test_uniform(&state, -2 * s, 2 * s), test_uniform(&state, -2 * s, 2 * s),
+		           test_uniform(&state, -2 * s, 2 * s)};
+		float radius = test_uniform(&state, 0.0f, 0.3f * s);
 		float toi;
 		bool hit = plait_point_path_reaches_triangle(p0, p1, a, b, c, radius, &toi);
 		float first_within = 2.0f, smallest = INFINITY;
@@ -670,8 +657,8 @@ Test(ccd_cases, static_triangle_sweep_never_misses)
 		if (first_within <= 1.0f) {
 			cr_assert(hit, "case %d: the path comes within %g of the triangle (radius %g) but no hit", n,
 			          (double)smallest, (double)radius);
-			cr_assert_leq(toi, first_within + 1e-6f, "case %d: toi %g after the first touch %g", n, (double)toi,
-			              (double)first_within);
+			cr_assert_leq(toi, first_within + 1e-6f, "case %d: toi %g after the first touch %g", n,
+			              (double)toi, (double)first_within);
 			++hits;
 		} else if (!hit) {
 			cr_assert_gt(smallest, radius, "case %d", n);
@@ -697,14 +684,16 @@ Test(ccd_cases, static_triangle_sweep_grazing_and_piercing)
 	cr_assert(!plait_point_path_reaches_triangle(v3(0.1f, 0.0102f, 0.1f), v3(0.3f, 0.0102f, 0.2f), a, b, c,
 	                                             0.01f, &toi));
 	/* Descending onto it: the touch at y = 0.01 comes at t = 0.9 (y from 0.1 to 0). */
-	cr_assert(plait_point_path_reaches_triangle(v3(0.2f, 0.1f, 0.2f), v3(0.2f, 0.0f, 0.2f), a, b, c, 0.01f, &toi));
+	cr_assert(
+	    plait_point_path_reaches_triangle(v3(0.2f, 0.1f, 0.2f), v3(0.2f, 0.0f, 0.2f), a, b, c, 0.01f, &toi));
 	cr_assert(toi <= 0.9f && toi > 0.899f, "toi %g", (double)toi);
 	/* At 1000 m/s through it, zero radius: no tunnelling. */
-	cr_assert(plait_point_path_reaches_triangle(v3(0.2f, 1.0f, 0.2f), v3(0.2f, -1.0f, 0.2f), a, b, c, 0.0f, &toi));
+	cr_assert(
+	    plait_point_path_reaches_triangle(v3(0.2f, 1.0f, 0.2f), v3(0.2f, -1.0f, 0.2f), a, b, c, 0.0f, &toi));
 	cr_assert(toi <= 0.5f && toi > 0.499f, "toi %g", (double)toi);
 	/* Past an edge at the radius. */
-	cr_assert(plait_point_path_reaches_triangle(v3(-1.0f, 0.0f, -0.01f), v3(2.0f, 0.0f, -0.01f), a, b, c, 0.01f,
-	                                            &toi));
+	cr_assert(plait_point_path_reaches_triangle(v3(-1.0f, 0.0f, -0.01f), v3(2.0f, 0.0f, -0.01f), a, b, c,
+	                                            0.01f, &toi));
 	cr_assert(!plait_point_path_reaches_triangle(v3(-1.0f, 0.0f, -0.0102f), v3(2.0f, 0.0f, -0.0102f), a, b, c,
 	                                             0.01f, &toi));
 }

@@ -11,69 +11,55 @@
 #include "scene.h"
 #include "test_support.h"
 
-/* Deterministic random numbers (xorshift), so a failure can be replayed. */
-static uint32_t next_random(uint32_t *state)
-{
-	uint32_t x = *state;
-	x ^= x << 13;
-	x ^= x >> 17;
-	x ^= x << 5;
-	return *state = x;
-}
-
-static float uniform(uint32_t *state, float low, float high)
-{
-	return low + (high - low) * (float)(next_random(state) & 0xFFFFFF) / (float)0xFFFFFF;
-}
-
 Test(stability, random_parameters_never_go_non_finite, .timeout = 600)
 {
 	uint32_t state = 12345u;
 	int runs = getenv("PLAIT_STABILITY_RUNS") ? atoi(getenv("PLAIT_STABILITY_RUNS")) : 300;
 	for (int run = 0; run < runs; ++run) {
 		plait_world_def wdef = plait_default_world_def();
-		wdef.fps = uniform(&state, 12.0f, 120.0f);
-		wdef.substeps = 1 + (int)(next_random(&state) % 8);
-		wdef.max_collision_iterations = (int)(next_random(&state) % 10);
-		wdef.gravity = (plait_vec3){uniform(&state, -5, 5), uniform(&state, -30, 0), uniform(&state, -5, 5)};
-		wdef.air_density = uniform(&state, 0.0f, 5.0f);
-		wdef.wind.speed = uniform(&state, 0.0f, 30.0f);
-		wdef.wind.direction =
-		    (plait_vec3){uniform(&state, -1, 1), uniform(&state, -1, 1), uniform(&state, -1, 1)};
-		wdef.wind.noise = uniform(&state, 0.0f, 2.0f);
-		wdef.space_scale = next_random(&state) % 4 == 0 ? 0.01f : 1.0f;
-		wdef.time_scale = uniform(&state, 0.25f, 2.0f);
+		wdef.fps = test_uniform(&state, 12.0f, 120.0f);
+		wdef.substeps = 1 + (int)(test_random(&state) % 8);
+		wdef.max_collision_iterations = (int)(test_random(&state) % 10);
+		wdef.gravity = (plait_vec3){test_uniform(&state, -5, 5), test_uniform(&state, -30, 0),
+		                            test_uniform(&state, -5, 5)};
+		wdef.air_density = test_uniform(&state, 0.0f, 5.0f);
+		wdef.wind.speed = test_uniform(&state, 0.0f, 30.0f);
+		wdef.wind.direction = (plait_vec3){test_uniform(&state, -1, 1), test_uniform(&state, -1, 1),
+		                                   test_uniform(&state, -1, 1)};
+		wdef.wind.noise = test_uniform(&state, 0.0f, 2.0f);
+		wdef.space_scale = test_random(&state) % 4 == 0 ? 0.01f : 1.0f;
+		wdef.time_scale = test_uniform(&state, 0.25f, 2.0f);
 		plait_error error;
 		plait_world_id world = plait_create_world(&wdef, &error);
 		cr_assert(!plait_world_id_is_null(world), "run %d: %s", run, error.message);
 		float unit = 1.0f / wdef.space_scale;
 
-		int n = 4 + (int)(next_random(&state) % 12);
-		test_grid grid =
-		    test_grid_make(n, n, unit * uniform(&state, 0.2f, 2.0f), unit * uniform(&state, 0.2f, 2.0f));
+		int n = 4 + (int)(test_random(&state) % 12);
+		test_grid grid = test_grid_make(n, n, unit * test_uniform(&state, 0.2f, 2.0f),
+		                                unit * test_uniform(&state, 0.2f, 2.0f));
 		for (int i = 0; i < grid.vertex_count; ++i) {
 			grid.positions[i].y = unit * 1.0f;
 		}
 		plait_cloth_def cloth = plait_default_cloth_def();
 		cloth.mesh = test_grid_mesh(&grid);
-		cloth.density = uniform(&state, 0.01f, 5.0f);
-		cloth.stretch_resistance = powf(10.0f, uniform(&state, -1.0f, 4.0f));
-		cloth.compression_resistance = powf(10.0f, uniform(&state, -1.0f, 4.0f));
-		cloth.shear_resistance = powf(10.0f, uniform(&state, -1.0f, 4.0f));
-		cloth.bend_resistance = powf(10.0f, uniform(&state, -2.0f, 3.0f));
-		cloth.iterations = next_random(&state) % 2 ? 0 : 1 + (int)(next_random(&state) % 40);
-		cloth.rest_length_scale = uniform(&state, 0.5f, 1.5f);
-		cloth.drag = uniform(&state, 0.0f, 2.0f);
-		cloth.tangential_drag = uniform(&state, 0.0f, 1.0f);
-		cloth.lift = uniform(&state, 0.0f, 1.0f);
-		cloth.damp = uniform(&state, 0.0f, 5.0f);
-		cloth.surface.thickness = unit * uniform(&state, 0.0f, 0.05f);
-		cloth.surface.friction = uniform(&state, 0.0f, 2.0f);
-		cloth.surface.bounce = uniform(&state, 0.0f, 1.0f);
-		cloth.surface.stickiness = uniform(&state, 0.0f, 1.0f);
+		cloth.density = test_uniform(&state, 0.01f, 5.0f);
+		cloth.stretch_resistance = powf(10.0f, test_uniform(&state, -1.0f, 4.0f));
+		cloth.compression_resistance = powf(10.0f, test_uniform(&state, -1.0f, 4.0f));
+		cloth.shear_resistance = powf(10.0f, test_uniform(&state, -1.0f, 4.0f));
+		cloth.bend_resistance = powf(10.0f, test_uniform(&state, -2.0f, 3.0f));
+		cloth.iterations = test_random(&state) % 2 ? 0 : 1 + (int)(test_random(&state) % 40);
+		cloth.rest_length_scale = test_uniform(&state, 0.5f, 1.5f);
+		cloth.drag = test_uniform(&state, 0.0f, 2.0f);
+		cloth.tangential_drag = test_uniform(&state, 0.0f, 1.0f);
+		cloth.lift = test_uniform(&state, 0.0f, 1.0f);
+		cloth.damp = test_uniform(&state, 0.0f, 5.0f);
+		cloth.surface.thickness = unit * test_uniform(&state, 0.0f, 0.05f);
+		cloth.surface.friction = test_uniform(&state, 0.0f, 2.0f);
+		cloth.surface.bounce = test_uniform(&state, 0.0f, 1.0f);
+		cloth.surface.stickiness = test_uniform(&state, 0.0f, 1.0f);
 		int pins[2] = {0, n};
 		cloth.pins = pins;
-		cloth.pin_count = (int)(next_random(&state) % 3);
+		cloth.pin_count = (int)(test_random(&state) % 3);
 		plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
 		cr_assert(!plait_object_id_is_null(cloth_id), "run %d: %s", run, error.message);
 
@@ -84,35 +70,36 @@ Test(stability, random_parameters_never_go_non_finite, .timeout = 600)
 		plait_curve_def rope = plait_default_curve_def();
 		rope.positions = rope_x;
 		rope.vertex_count = 12;
-		rope.mass = uniform(&state, 0.001f, 1.0f);
-		rope.stretch_resistance = powf(10.0f, uniform(&state, -1.0f, 4.0f));
-		rope.bend_resistance = powf(10.0f, uniform(&state, -2.0f, 3.0f));
-		rope.drag = uniform(&state, 0.0f, 2.0f);
+		rope.mass = test_uniform(&state, 0.001f, 1.0f);
+		rope.stretch_resistance = powf(10.0f, test_uniform(&state, -1.0f, 4.0f));
+		rope.bend_resistance = powf(10.0f, test_uniform(&state, -2.0f, 3.0f));
+		rope.drag = test_uniform(&state, 0.0f, 2.0f);
 		plait_create_curve(world, &rope, NULL);
 
 		plait_vec3 dots[30];
 		for (int i = 0; i < 30; ++i) {
-			dots[i] = (plait_vec3){unit * uniform(&state, -0.5f, 0.5f), unit * uniform(&state, 0.5f, 2.0f),
-			                       unit * uniform(&state, -0.5f, 0.5f)};
+			dots[i] = (plait_vec3){unit * test_uniform(&state, -0.5f, 0.5f),
+			                       unit * test_uniform(&state, 0.5f, 2.0f),
+			                       unit * test_uniform(&state, -0.5f, 0.5f)};
 		}
 		plait_particles_def particles = plait_default_particles_def();
 		particles.positions = dots;
 		particles.count = 30;
-		particles.radius = unit * uniform(&state, 0.005f, 0.1f);
-		particles.mass = uniform(&state, 0.001f, 10.0f);
-		particles.surface.bounce = uniform(&state, 0.0f, 1.0f);
+		particles.radius = unit * test_uniform(&state, 0.005f, 0.1f);
+		particles.mass = test_uniform(&state, 0.001f, 10.0f);
+		particles.surface.bounce = test_uniform(&state, 0.0f, 1.0f);
 		plait_create_particles(world, &particles, NULL);
 
 		plait_collider_def collider = plait_default_collider_def();
-		collider.shape = (plait_shape_type)(next_random(&state) % 4);
+		collider.shape = (plait_shape_type)(test_random(&state) % 4);
 		collider.center = (plait_vec3){0.0f, unit * 0.4f, 0.0f};
-		collider.radius = unit * uniform(&state, 0.1f, 0.5f);
+		collider.radius = unit * test_uniform(&state, 0.1f, 0.5f);
 		collider.a = (plait_vec3){-unit * 0.5f, unit * 0.4f, 0.0f};
 		collider.b = (plait_vec3){unit * 0.5f, unit * 0.4f, 0.0f};
 		collider.size = (plait_vec3){unit * 0.6f, unit * 0.3f, unit * 0.6f};
-		collider.rotation_deg = (plait_vec3){uniform(&state, 0, 90), uniform(&state, 0, 90), 0.0f};
-		collider.surface.friction = uniform(&state, 0.0f, 2.0f);
-		collider.surface.thickness = unit * uniform(&state, 0.0f, 0.05f);
+		collider.rotation_deg = (plait_vec3){test_uniform(&state, 0, 90), test_uniform(&state, 0, 90), 0.0f};
+		collider.surface.friction = test_uniform(&state, 0.0f, 2.0f);
+		collider.surface.thickness = unit * test_uniform(&state, 0.0f, 0.05f);
 		plait_object_id collider_id = plait_create_collider(world, &collider, &error);
 		cr_assert(!plait_object_id_is_null(collider_id), "run %d: %s", run, error.message);
 

@@ -236,19 +236,31 @@ Test(threads, spinning_workers_eight, .timeout = 120)
 
 /* A 40 x 40 cloth with self-collision falling on a sphere, and 64 particles dropped on it;
  * positions of both objects after 30 frames. */
-static plait_vec3 *drape_positions(int worker_count, int *count)
+/* A world run by a pool of worker_count threads (none for 1), with substeps (0: default). */
+static plait_world_id pooled_world(int worker_count, int substeps, plait_thread_pool **pool)
 {
-	plait_thread_pool *pool = NULL;
+	*pool = NULL;
 	if (worker_count > 1) {
-		pool = plait_thread_pool_create(worker_count);
-		cr_assert_not_null(pool);
+		*pool = plait_thread_pool_create(worker_count);
+		cr_assert_not_null(*pool);
 	}
 	plait_world_def wdef = plait_default_world_def();
-	plait_thread_pool_attach(pool, &wdef);
+	if (substeps > 0) {
+		wdef.substeps = substeps;
+	}
+	plait_thread_pool_attach(*pool, &wdef);
 	cr_assert_eq(wdef.worker_count, worker_count);
 	plait_error error = {0};
 	plait_world_id world = plait_create_world(&wdef, &error);
 	cr_assert(!plait_world_id_is_null(world), "%s", error.message);
+	return world;
+}
+
+static plait_vec3 *drape_positions(int worker_count, int *count)
+{
+	plait_thread_pool *pool;
+	plait_world_id world = pooled_world(worker_count, 0, &pool);
+	plait_error error = {0};
 
 	test_grid grid = test_grid_make(40, 40, 1.6f, 1.6f);
 	for (int i = 0; i < grid.vertex_count; ++i)
@@ -311,17 +323,9 @@ Test(threads, same_positions_with_1_2_and_8_workers, .timeout = 600)
  * between workers by particle rows, never inside one. */
 static plait_vec3 *tethered_positions(int worker_count, int *count)
 {
-	plait_thread_pool *pool = NULL;
-	if (worker_count > 1) {
-		pool = plait_thread_pool_create(worker_count);
-		cr_assert_not_null(pool);
-	}
-	plait_world_def wdef = plait_default_world_def();
-	wdef.substeps = 4;
-	plait_thread_pool_attach(pool, &wdef);
+	plait_thread_pool *pool;
+	plait_world_id world = pooled_world(worker_count, 4, &pool);
 	plait_error error = {0};
-	plait_world_id world = plait_create_world(&wdef, &error);
-	cr_assert(!plait_world_id_is_null(world), "%s", error.message);
 	int n = 90;
 	test_grid grid = test_grid_make(n, n, 2.0f, 2.0f);
 	int pins[3] = {0, n, (n / 2) * (n + 1)};

@@ -27,6 +27,13 @@ typedef struct mat3 {
 #define PLAIT_VECTOR_CLONES
 #endif
 
+/* Selects for branch-free lane code (vectorised loops): an int condition, not a bool, keeps
+ * gcc's vectoriser from mixing mask widths. */
+static inline float plait_select(int condition, float a, float b)
+{
+	return condition ? a : b;
+}
+
 /* Plain comparisons: fmaxf/fminf must honour NaN rules and become library calls in hot loops. */
 static inline float plait_maxf(float a, float b)
 {
@@ -95,6 +102,10 @@ static inline float v3_length_sq(vec3 a)
 static inline float v3_length(vec3 a)
 {
 	return sqrtf(v3_dot(a, a));
+}
+static inline vec3 v3_select(int condition, vec3 a, vec3 b)
+{
+	return (vec3){condition ? a.x : b.x, condition ? a.y : b.y, condition ? a.z : b.z};
 }
 static inline vec3 v3_lerp(vec3 a, vec3 b, float t)
 {

@@ -443,16 +443,6 @@ static inline void lane_set(lanes3 *lanes, int k, vec3 value)
 	lanes->z[k] = value.z;
 }
 
-static inline float select_float(int condition, float a, float b)
-{
-	return condition ? a : b;
-}
-
-static inline vec3 select_vec3(int condition, vec3 a, vec3 b)
-{
-	return (vec3){condition ? a.x : b.x, condition ? a.y : b.y, condition ? a.z : b.z};
-}
-
 PLAIT_VECTOR_CLONES static void solve_sphere_batch(sphere_batch *restrict batch, int count, vec3 centre,
                                                    float sphere_radius)
 {
@@ -466,36 +456,36 @@ PLAIT_VECTOR_CLONES static void solve_sphere_batch(sphere_batch *restrict batch,
 		float c = v3_dot(m, m) - reach * reach;
 		float a = v3_dot(motion, motion), b = v3_dot(m, motion);
 		float discriminant = b * b - a * c;
-		float t_hit = (-b - sqrtf(plait_maxf(discriminant, 0.0f))) / select_float(a > 0.0f, a, 1.0f);
+		float t_hit = (-b - sqrtf(plait_maxf(discriminant, 0.0f))) / plait_select(a > 0.0f, a, 1.0f);
 		/* Conditions combined with & on ints, not && on bools: branch-free, so vectorised. */
 		int started_inside = c <= 0.0f;
 		int swept = (a > 0.0f) & (b < 0.0f) & (discriminant >= 0.0f) & (t_hit <= 1.0f);
-		float toi = select_float(started_inside, 0.0f, select_float(t_hit > 0.0f, t_hit, 0.0f));
+		float toi = plait_select(started_inside, 0.0f, plait_select(t_hit > 0.0f, t_hit, 0.0f));
 		/* plait_shape_distance, sphere, at the hit; trapped: at the end instead */
 		vec3 hit = v3_lerp(p0, p1, toi);
 		vec3 d = v3_sub(hit, centre);
 		float length = v3_length(d);
-		vec3 normal = select_vec3(length > 1e-12f, v3_scale(d, 1.0f / length), v3(0.0f, 1.0f, 0.0f));
+		vec3 normal = v3_select(length > 1e-12f, v3_scale(d, 1.0f / length), v3(0.0f, 1.0f, 0.0f));
 		float distance = length - sphere_radius;
 		int trapped =
-		    select_float(toi == 0.0f, 1.0f, 0.0f) * select_float(distance < radius, 1.0f, 0.0f) > 0.5f;
+		    plait_select(toi == 0.0f, 1.0f, 0.0f) * plait_select(distance < radius, 1.0f, 0.0f) > 0.5f;
 		vec3 d1 = v3_sub(p1, centre);
 		float length1 = v3_length(d1);
-		vec3 normal1 = select_vec3(length1 > 1e-12f, v3_scale(d1, 1.0f / length1), v3(0.0f, 1.0f, 0.0f));
-		normal = select_vec3(trapped, normal1, normal);
-		distance = select_float(trapped, length1 - sphere_radius, distance);
-		hit = select_vec3(trapped, p1, hit);
+		vec3 normal1 = v3_select(length1 > 1e-12f, v3_scale(d1, 1.0f / length1), v3(0.0f, 1.0f, 0.0f));
+		normal = v3_select(trapped, normal1, normal);
+		distance = plait_select(trapped, length1 - sphere_radius, distance);
+		hit = v3_select(trapped, p1, hit);
 		vec3 surface = v3_mul_add(hit, -distance, normal);
 		float depth = radius - v3_dot(v3_sub(p1, surface), normal);
 		/* contact_correction and friction_correction */
 		float limit = batch->friction[k] * depth;
 		vec3 tangential = v3_mul_add(motion, -v3_dot(motion, normal), normal);
 		float tangential_length = v3_length(tangential);
-		float removed = select_float(tangential_length < limit, 1.0f, limit / tangential_length);
+		float removed = plait_select(tangential_length < limit, 1.0f, limit / tangential_length);
 		int rubs = (tangential_length > 0.0f) & (limit > 0.0f);
-		vec3 rub = select_vec3(rubs, v3_scale(tangential, -removed), v3(0.0f, 0.0f, 0.0f));
+		vec3 rub = v3_select(rubs, v3_scale(tangential, -removed), v3(0.0f, 0.0f, 0.0f));
 		vec3 correction = v3_add(v3_scale(normal, depth), rub);
-		batch->touch[k] = select_float(started_inside, 1.0f, select_float(swept, 1.0f, 0.0f));
+		batch->touch[k] = plait_select(started_inside, 1.0f, plait_select(swept, 1.0f, 0.0f));
 		batch->depth[k] = depth;
 		lane_set(&batch->normal, k, normal);
 		lane_set(&batch->surface, k, surface);

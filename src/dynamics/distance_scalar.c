@@ -2,12 +2,19 @@
 
 #include <math.h>
 
-/* A block without compliance: the general formula with alpha = 0 and lambda = 0, in the same
- * operations (every constraint active where a particle moves). */
-static void project_rigid(plait_distance_block *block, plait_point *points, int begin, int end)
+/* The reference arithmetic: the vector kernels repeat these operations lane by lane, in this
+ * order, so the three give the same bits. A rigid block (no compliance) takes the general
+ * formula with alpha = 0 and lambda = 0 in the same operations, without touching the
+ * compliance and lambda arrays; `rigid` is a constant in each call below, so the compiler
+ * makes two loops. */
+static inline __attribute__((always_inline)) void project_range(plait_distance_block *block,
+                                                                plait_point *points, int begin, int end,
+                                                                float inverse_h_squared, bool rigid)
 {
 	const int(*pair)[2] = (const int(*)[2])block->pair;
-	const float *rest = block->rest;
+	const float *rest = block->rest, *tension = block->compliance_tension;
+	const float *compression = block->compliance_compression;
+	float *lambda = block->lambda;
 	for (int c = begin; c < end; ++c) {
 		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
 		float wi = pi->w, wj = pj->w;
@@ -16,8 +23,20 @@ static void project_rigid(plait_distance_block *block, plait_point *points, int 
 		length = length > 1e-12f ? length : 1e-12f;
 		float C = length - rest[c];
 		float w_sum = wi + wj;
-		float denominator = w_sum > 0.0f ? w_sum * length : 1.0f;
-		float s = w_sum > 0.0f ? -C / denominator : 0.0f;
+		float s;
+		if (rigid) {
+			float denominator = w_sum > 0.0f ? w_sum * length : 1.0f;
+			s = w_sum > 0.0f ? -C / denominator : 0.0f;
+		} else {
+			float alpha = C > 0.0f ? tension[c] : compression[c];
+			bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
+			float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
+			float denominator = (w_sum + alpha_tilde) * length;
+			denominator = w_sum > 0.0f ? denominator : 1.0f;
+			s = (-C - alpha_tilde * lambda[c]) / denominator;
+			s = active ? s : 0.0f;
+			lambda[c] = lambda[c] + s * length;
+		}
 		float si = wi * s, sj = wj * s;
 		pi->x.x = pi->x.x - si * dx;
 		pi->x.y = pi->x.y - si * dy;
@@ -28,42 +47,13 @@ static void project_rigid(plait_distance_block *block, plait_point *points, int 
 	}
 }
 
-/* The reference arithmetic: the vector kernels repeat these operations lane by lane, in this
- * order, so the three give the same bits. */
 void plait_project_distance_scalar(plait_distance_block *block, plait_point *points, int begin, int end,
                                    float inverse_h_squared)
 {
-	const int(*pair)[2] = (const int(*)[2])block->pair;
-	const float *rest = block->rest, *tension = block->compliance_tension;
-	const float *compression = block->compliance_compression;
-	float *lambda = block->lambda;
 	if (block->compliant_count == 0) {
-		project_rigid(block, points, begin, end);
-		return;
-	}
-	for (int c = begin; c < end; ++c) {
-		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
-		float wi = pi->w, wj = pj->w;
-		float dx = pj->x.x - pi->x.x, dy = pj->x.y - pi->x.y, dz = pj->x.z - pi->x.z;
-		float length = sqrtf(dx * dx + dy * dy + dz * dz);
-		length = length > 1e-12f ? length : 1e-12f;
-		float C = length - rest[c];
-		float alpha = C > 0.0f ? tension[c] : compression[c];
-		float w_sum = wi + wj;
-		bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
-		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
-		float denominator = (w_sum + alpha_tilde) * length;
-		denominator = w_sum > 0.0f ? denominator : 1.0f;
-		float s = (-C - alpha_tilde * lambda[c]) / denominator;
-		s = active ? s : 0.0f;
-		lambda[c] = lambda[c] + s * length;
-		float si = wi * s, sj = wj * s;
-		pi->x.x = pi->x.x - si * dx;
-		pi->x.y = pi->x.y - si * dy;
-		pi->x.z = pi->x.z - si * dz;
-		pj->x.x = pj->x.x + sj * dx;
-		pj->x.y = pj->x.y + sj * dy;
-		pj->x.z = pj->x.z + sj * dz;
+		project_range(block, points, begin, end, inverse_h_squared, true);
+	} else {
+		project_range(block, points, begin, end, inverse_h_squared, false);
 	}
 }
 

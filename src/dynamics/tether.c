@@ -6,6 +6,8 @@
  * and left such vertices 0.7% past their tether after eight rounds. */
 #include "dynamics/constraints.h"
 
+#include "core/dvec3.h"
+
 #include <math.h>
 #include <stdint.h>
 
@@ -14,41 +16,9 @@ _Static_assert(PLAIT_TETHER_ANCHORS <= 8, "a particle's tethers must fit a chunk
 #define MAX_ROW 8             /* tethers of one particle handled exactly; more are projected in turn */
 #define INSIDE_TOLERANCE 1e-6 /* relative to a ball's radius, for rounding in the candidates */
 
-/* The candidates are found in double precision: the circle where two spheres meet comes from
- * a difference of squares that loses most of a float's digits when the circle is small. */
-typedef struct dvec3 {
-	double x, y, z;
-} dvec3;
-
-static dvec3 d3(vec3 a)
-{
-	return (dvec3){a.x, a.y, a.z};
-}
-static dvec3 d3_add(dvec3 a, dvec3 b)
-{
-	return (dvec3){a.x + b.x, a.y + b.y, a.z + b.z};
-}
-static dvec3 d3_sub(dvec3 a, dvec3 b)
-{
-	return (dvec3){a.x - b.x, a.y - b.y, a.z - b.z};
-}
-static dvec3 d3_scale(dvec3 a, double s)
-{
-	return (dvec3){a.x * s, a.y * s, a.z * s};
-}
-static double d3_dot(dvec3 a, dvec3 b)
-{
-	return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-static dvec3 d3_cross(dvec3 a, dvec3 b)
-{
-	return (dvec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-static double d3_length(dvec3 a)
-{
-	return sqrt(d3_dot(a, a));
-}
-
+/* The candidates are found in double precision (core/dvec3.h): the circle where two spheres
+ * meet comes from a difference of squares that loses most of a float's digits when the circle
+ * is small. */
 typedef struct ball {
 	dvec3 centre;
 	double radius;
@@ -215,48 +185,11 @@ static __attribute__((noinline)) void project_row_exactly(const plait_tether_blo
 	}
 }
 
-static inline bool within_reach(vec3 q, vec3 anchor, float length)
+/* Whether q lies within a tether's reach, up to the rounding tolerance. */
+static inline int within_reach(vec3 q, vec3 anchor, float length)
 {
 	float reach = length * (1.0f + (float)INSIDE_TOLERANCE);
 	return v3_length_sq(v3_sub(q, anchor)) <= reach * reach;
-}
-
-/* Two tethers, p outside w's reach and its projection onto w outside o's: the nearest point of
- * the two balls is p's projection onto o if that lies within w's reach, else the nearest point
- * of the circle where the spheres meet. Tried in float, and kept only if it checks out within
- * both reaches: a thin lens (a small circle, from a difference of squares) loses too many
- * digits in float and is left to the exact search in double. */
-static inline bool nearest_in_two_balls(vec3 p, vec3 w, float w_length, vec3 o, float o_length, vec3 *out)
-{
-	vec3 from_o = v3_sub(p, o);
-	float o_distance_sq = v3_length_sq(from_o);
-	if (o_distance_sq > o_length * o_length) {
-		vec3 q = v3_mul_add(o, o_length / sqrtf(o_distance_sq), from_o);
-		if (within_reach(q, w, w_length)) {
-			*out = q;
-			return true;
-		}
-	}
-	vec3 d = v3_sub(o, w);
-	float d_sq = v3_length_sq(d);
-	if (!(d_sq > 0.0f)) {
-		return false;
-	}
-	float along = 0.5f * (1.0f + (w_length * w_length - o_length * o_length) / d_sq); /* share of d */
-	float radius_sq = w_length * w_length - along * along * d_sq;
-	vec3 centre = v3_mul_add(w, along, d);
-	vec3 offset = v3_sub(p, centre);
-	vec3 in_plane = v3_mul_add(offset, -v3_dot(offset, d) / d_sq, d);
-	float in_plane_length = v3_length(in_plane);
-	if (!(radius_sq > 0.0f) || !(in_plane_length > 1e-12f)) {
-		return false;
-	}
-	vec3 q = v3_mul_add(centre, sqrtf(radius_sq) / in_plane_length, in_plane);
-	if (!within_reach(q, w, w_length) || !within_reach(q, o, o_length)) {
-		return false;
-	}
-	*out = q;
-	return true;
 }
 
 static inline void project_row(const plait_tether_block *block, plait_point *points, int first, int end)
@@ -288,13 +221,7 @@ static inline void project_row(const plait_tether_block *block, plait_point *poi
 	vec3 projected = v3_mul_add(anchor, block->length[worst] / v3_length(d), d);
 	bool within = true;
 	for (int c = first; c < end && within; ++c) {
-		float reach = block->length[c] * (1.0f + (float)INSIDE_TOLERANCE);
-		within = c == worst || v3_length_sq(v3_sub(projected, points[block->pair[c][1]].x)) <= reach * reach;
-	}
-	if (!within && end - first == 2) {
-		int other = worst == first ? first + 1 : first;
-		within = nearest_in_two_balls(p->x, anchor, block->length[worst], points[block->pair[other][1]].x,
-		                              block->length[other], &projected);
+		within = c == worst || within_reach(projected, points[block->pair[c][1]].x, block->length[c]);
 	}
 	if (within) {
 		/* One stiffness per cloth: the row's tethers share it. */
@@ -304,10 +231,13 @@ static inline void project_row(const plait_tether_block *block, plait_point *poi
 	}
 }
 
-/* Particles with two taut-or-slack tethers (a cloth hung from two pins: most of them) are
- * solved a batch at a time, like project_row and nearest_in_two_balls but lane by lane over
- * coordinate arrays with selects instead of branches, which the compiler vectorises; the same
- * operations, so the same bits. A lane none of whose candidates checks out goes to
+/* Particles with two tethers (a cloth hung from two pins: nearly all of them) are solved a
+ * batch at a time, lane by lane over coordinate arrays with selects instead of branches, which
+ * the compiler vectorises. As project_row: the projection onto the worst tether if it lies
+ * within the other's reach; else, in float, the projection onto the other if it lies within the
+ * first's, else the nearest point of the circle where the two spheres meet; each kept only if
+ * it checks out within both reaches (a thin lens, a small circle from a difference of squares,
+ * loses too many digits in float). A lane none of whose candidates checks out goes to
  * project_row_exactly afterwards. */
 enum { PAIR_BATCH = 160 };
 
@@ -320,22 +250,6 @@ typedef struct pair_batch {
 	float qx[PAIR_BATCH], qy[PAIR_BATCH], qz[PAIR_BATCH];
 	int found[PAIR_BATCH];
 } pair_batch;
-
-static inline float pick(int condition, float a, float b)
-{
-	return condition ? a : b;
-}
-
-static inline vec3 pick3(int condition, vec3 a, vec3 b)
-{
-	return (vec3){condition ? a.x : b.x, condition ? a.y : b.y, condition ? a.z : b.z};
-}
-
-static inline int reaches(vec3 q, vec3 anchor, float length)
-{
-	float reach = length * (1.0f + (float)INSIDE_TOLERANCE);
-	return v3_length_sq(v3_sub(q, anchor)) <= reach * reach;
-}
 
 PLAIT_VECTOR_CLONES static void solve_pair_batch(pair_batch *restrict batch, int count)
 {
@@ -353,32 +267,32 @@ PLAIT_VECTOR_CLONES static void solve_pair_batch(pair_batch *restrict batch, int
 		 * excesses round to zero. */
 		int first_worst = (e0 > 0.0f) & (e0 >= e1);
 		int none = (e0 <= 0.0f) & (e1 <= 0.0f);
-		vec3 w = pick3(first_worst, a0, a1), o = pick3(first_worst, a1, a0);
-		float w_length = pick(first_worst, l0, l1), o_length = pick(first_worst, l1, l0);
-		vec3 d = pick3(first_worst, d0, d1);
-		vec3 projected = v3_mul_add(w, w_length / pick(first_worst, r0, r1), d); /* r: |d| */
-		int within = reaches(projected, o, o_length);
+		vec3 w = v3_select(first_worst, a0, a1), o = v3_select(first_worst, a1, a0);
+		float w_length = plait_select(first_worst, l0, l1), o_length = plait_select(first_worst, l1, l0);
+		vec3 d = v3_select(first_worst, d0, d1);
+		vec3 projected = v3_mul_add(w, w_length / plait_select(first_worst, r0, r1), d); /* r: |d| */
+		int within = within_reach(projected, o, o_length);
 		/* nearest_in_two_balls: the projection onto the other, then the circle. */
-		vec3 from_o = pick3(first_worst, d1, d0);
-		float o_distance_sq = pick(first_worst, d1_sq, d0_sq);
-		vec3 onto_o = v3_mul_add(o, o_length / pick(first_worst, r1, r0), from_o);
-		int onto_o_fits = (o_distance_sq > o_length * o_length) & reaches(onto_o, w, w_length);
+		vec3 from_o = v3_select(first_worst, d1, d0);
+		float o_distance_sq = plait_select(first_worst, d1_sq, d0_sq);
+		vec3 onto_o = v3_mul_add(o, o_length / plait_select(first_worst, r1, r0), from_o);
+		int onto_o_fits = (o_distance_sq > o_length * o_length) & within_reach(onto_o, w, w_length);
 		vec3 axis = v3_sub(o, w);
 		float axis_sq = v3_length_sq(axis);
-		float safe_axis_sq = pick(axis_sq > 0.0f, axis_sq, 1.0f);
+		float safe_axis_sq = plait_select(axis_sq > 0.0f, axis_sq, 1.0f);
 		float along = 0.5f * (1.0f + (w_length * w_length - o_length * o_length) / safe_axis_sq);
 		float radius_sq = w_length * w_length - along * along * safe_axis_sq;
 		vec3 centre = v3_mul_add(w, along, axis);
 		vec3 offset = v3_sub(p, centre);
 		vec3 in_plane = v3_mul_add(offset, -v3_dot(offset, axis) / safe_axis_sq, axis);
 		float in_plane_length = v3_length(in_plane);
-		float safe_length = pick(in_plane_length > 1e-12f, in_plane_length, 1.0f);
-		vec3 on_circle =
-		    v3_mul_add(centre, sqrtf(pick(radius_sq > 0.0f, radius_sq, 0.0f)) / safe_length, in_plane);
+		float safe_length = plait_select(in_plane_length > 1e-12f, in_plane_length, 1.0f);
+		vec3 on_circle = v3_mul_add(
+		    centre, sqrtf(plait_select(radius_sq > 0.0f, radius_sq, 0.0f)) / safe_length, in_plane);
 		int circle_fits = (axis_sq > 0.0f) & (radius_sq > 0.0f) & (in_plane_length > 1e-12f) &
-		                  reaches(on_circle, w, w_length) & reaches(on_circle, o, o_length);
-		vec3 q = pick3(within, projected, pick3(onto_o_fits, onto_o, on_circle));
-		q = pick3(none, p, v3_lerp(p, q, batch->stiffness[k]));
+		                  within_reach(on_circle, w, w_length) & within_reach(on_circle, o, o_length);
+		vec3 q = v3_select(within, projected, v3_select(onto_o_fits, onto_o, on_circle));
+		q = v3_select(none, p, v3_lerp(p, q, batch->stiffness[k]));
 		batch->qx[k] = q.x;
 		batch->qy[k] = q.y;
 		batch->qz[k] = q.z;

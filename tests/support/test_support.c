@@ -58,3 +58,17 @@ bool test_step_frames(plait_world_id world, int n)
 	}
 	return true;
 }
+
+uint32_t test_random(uint32_t *state)
+{
+	uint32_t x = *state;
+	x ^= x << 13;
+	x ^= x >> 17;
+	x ^= x << 5;
+	return *state = x;
+}
+
+float test_uniform(uint32_t *state, float low, float high)
+{
+	return low + (high - low) * (float)(test_random(state) & 0xFFFFFF) / (float)0xFFFFFF;
+}
