@@ -156,6 +156,62 @@ Test(tethers, a_pinned_edge_holds_each_vertex_to_its_nearest_pins)
 	cr_assert_leq(ratio, 1.0 + 1e-4, "a vertex reached %g times a tether's length", ratio);
 }
 
+/* The solver regroups tethers by their pins (dynamics/tether.c); destroying an object renumbers
+ * the particles after it, and the regrouping must follow, or the second cloth's vertices would
+ * be held to stale numbers. */
+Test(tethers, hold_after_another_cloth_is_destroyed)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	/* A smaller cloth first, so that stale numbers would name other vertices and pins. */
+	int sizes[2] = {7, 12};
+	test_grid grids[2];
+	plait_object_id cloths[2];
+	for (int k = 0; k < 2; ++k) {
+		int n = sizes[k];
+		grids[k] = test_grid_make(n, n, 1.0f, 1.0f);
+		for (int i = 0; i < grids[k].vertex_count; ++i) {
+			grids[k].positions[i].x += 2.0f * (float)k;
+		}
+		int pins[2] = {0, n};
+		plait_cloth_def def = plait_default_cloth_def();
+		def.mesh = test_grid_mesh(&grids[k]);
+		def.iterations = 3;
+		def.pins = pins;
+		def.pin_count = 2;
+		def.tethers = PLAIT_TETHER_EUCLIDEAN;
+		plait_error error;
+		cloths[k] = plait_create_cloth(world, &def, &error);
+		cr_assert(!plait_object_id_is_null(cloths[k]), "%s", error.message);
+	}
+	const test_grid *grid = &grids[1];
+	int pins[2] = {0, sizes[1]};
+	plait_vec3 *x = malloc(sizeof *x * (size_t)grid->vertex_count);
+	cr_assert(test_step_frames(world, 10));
+	plait_destroy_object(cloths[0]);
+	double worst = 0.0;
+	for (int frame = 0; frame < 40; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_object_get_positions(cloths[1], 0, grid->vertex_count, x, NULL);
+		for (int v = 0; v < grid->vertex_count; ++v) {
+			for (int k = 0; k < 2; ++k) {
+				float d = v3len(grid->positions[v], grid->positions[pins[k]]);
+				if (d > 0.0f) {
+					worst = fmax(worst, v3len(x[v], x[pins[k]]) / d);
+				}
+			}
+		}
+	}
+	cr_assert_leq(worst, 1.0 + 1e-4, "a vertex reached %g times its tether length", worst);
+	/* It hangs: its free corners fell well below the pins. */
+	cr_assert_lt(x[grid->vertex_count - 1].y, -0.5f);
+	free(x);
+	test_grid_free(&grids[0]);
+	test_grid_free(&grids[1]);
+	plait_destroy_world(world);
+}
+
 /* Pins pulled apart past the cloth's reach leave the tethers without a common point: the
  * solver must stay finite and keep each vertex within reach of its nearest pin. */
 Test(tethers, pins_pulled_apart_stay_finite)

@@ -56,9 +56,12 @@ void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float
                       plait_bend_kernel *kernel, plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. */
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel);
-/* Whether every tether's anchor is pinned, for the frame to come (pins change between
- * frames only). */
-void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles);
+/* For the frame to come: whether every tether's anchor is pinned (pins change between frames
+ * only), and the solver's regrouping of the tethers, derived again if they changed. Out of
+ * memory only costs speed: the tethers are then solved as they are stored. */
+void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles,
+                               const plait_allocator *allocator);
+void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator *allocator);
 void plait_solve_rod_bend(plait_rod_bend_block *block, plait_particles *particles, float inverse_h_squared);
 
 /* Signed dihedral angle (radians, in (-pi, pi]) of the hinge p0-p1 with wings p2, p3: zero when

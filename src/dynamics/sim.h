@@ -162,7 +162,9 @@ typedef struct plait_tether_block {
 	int (*pair)[2];
 	float *length;
 	float *stiffness;
-	bool fixed_anchors; /* every anchor pinned: set at each frame's start (plait_sim_step) */
+	bool fixed_anchors;               /* every anchor pinned: set at each frame's start (plait_sim_step) */
+	bool lanes_stale;                 /* pair[] changed since `lanes` was derived from it */
+	struct plait_tether_lanes *lanes; /* the solver's regrouping (tether.c); NULL until derived */
 } plait_tether_block;
 
 /* Cloth triangles that feel the air. weight[k] is the area (scene units^2) the triangle lends

@@ -1,6 +1,7 @@
 #include "dynamics/sim_store.h"
 
 #include "dynamics/colouring.h"
+#include "dynamics/constraints.h"
 
 #include <string.h>
 
@@ -91,6 +92,7 @@ void plait_sim_destroy(plait_sim *sim)
 	FREE_FIELD(sim->tether, pair);
 	FREE_FIELD(sim->tether, length);
 	FREE_FIELD(sim->tether, stiffness);
+	plait_tether_lanes_destroy(&sim->tether, &sim->allocator);
 	FREE_FIELD(sim->aero, triangle);
 	FREE_FIELD(sim->aero, weight);
 	FREE_FIELD(sim->aero, material);
@@ -403,6 +405,7 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		++tether_kept;
 	}
 	tether->count = tether_kept;
+	tether->lanes_stale = true;
 
 	plait_aero_block *aero = &sim->aero;
 	int aero_kept = 0;

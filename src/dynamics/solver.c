@@ -248,7 +248,7 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 		memcpy(p->v_frame, p->v, sizeof(vec3) * (size_t)p->count);
 	}
 
-	plait_tethers_begin_frame(&sim->tether, p);
+	plait_tethers_begin_frame(&sim->tether, p, &sim->allocator);
 	plait_float_mode saved_mode = plait_float_mode_enter();
 	plait_parallel_begin(&sim->parallel);
 	result = run_substeps(sim, error);

@@ -231,32 +231,185 @@ static inline void project_row(const plait_tether_block *block, plait_point *poi
 	}
 }
 
-/* Particles with two tethers (a cloth hung from two pins: nearly all of them) are solved a
- * batch at a time, lane by lane over coordinate arrays with selects instead of branches, which
- * the compiler vectorises. As project_row: the projection onto the worst tether if it lies
- * within the other's reach; else, in float, the projection onto the other if it lies within the
- * first's, else the nearest point of the circle where the two spheres meet; each kept only if
- * it checks out within both reaches (a thin lens, a small circle from a difference of squares,
- * loses too many digits in float). A lane none of whose candidates checks out goes to
+/* The tethers regrouped for the solver when every anchor is a pin. Rows of two tethers (every
+ * free vertex of a cloth hung from two pins) are grouped by their pair of anchors, in runs: a
+ * run reads its two anchors once, and its rows are solved whole in vector lanes, without a
+ * test of which are taut first (a slack row comes out unchanged, to the bit). The other rows
+ * are copied into a block of their own, solved as before. */
+typedef struct tether_run {
+	int anchor[2];
+	int begin, end; /* its rows */
+} tether_run;
+
+typedef struct plait_tether_lanes {
+	int count; /* rows of two */
+	int *particle;
+	int *first; /* the row's first tether in the block, for project_row_exactly */
+	float *length[2];
+	float *stiffness;
+	int run_count;
+	tether_run *runs;
+	plait_tether_block others; /* the rows not of two (no lanes of its own) */
+} plait_tether_lanes;
+
+void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator *allocator)
+{
+	plait_tether_lanes *lanes = block->lanes;
+	if (lanes == NULL) {
+		return;
+	}
+	plait_free(allocator, lanes->particle);
+	plait_free(allocator, lanes->first);
+	plait_free(allocator, lanes->length[0]);
+	plait_free(allocator, lanes->length[1]);
+	plait_free(allocator, lanes->stiffness);
+	plait_free(allocator, lanes->runs);
+	plait_free(allocator, lanes->others.pair);
+	plait_free(allocator, lanes->others.length);
+	plait_free(allocator, lanes->others.stiffness);
+	plait_free(allocator, lanes);
+	block->lanes = NULL;
+}
+
+/* Rows of two are sorted by anchor pair, then particle: a run's particles lie near each other
+ * in memory. */
+typedef struct row_key {
+	int anchor[2], particle, first;
+} row_key;
+
+static int compare_rows(const void *a, const void *b)
+{
+	const row_key *x = a, *y = b;
+	if (x->anchor[0] != y->anchor[0]) {
+		return x->anchor[0] < y->anchor[0] ? -1 : 1;
+	}
+	if (x->anchor[1] != y->anchor[1]) {
+		return x->anchor[1] < y->anchor[1] ? -1 : 1;
+	}
+	return x->particle < y->particle ? -1 : x->particle > y->particle;
+}
+
+static int row_end(const plait_tether_block *block, int first)
+{
+	int end = first + 1;
+	while (end < block->count && block->pair[end][0] == block->pair[first][0]) {
+		++end;
+	}
+	return end;
+}
+
+static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
+{
+	plait_tether_lanes_destroy(block, a);
+	int rows = 0, runs = 0, other_tethers = 0;
+	for (int first = 0, end; first < block->count; first = end) {
+		end = row_end(block, first);
+		if (end - first == 2) {
+			++rows;
+		} else {
+			other_tethers += end - first;
+		}
+	}
+	plait_tether_lanes *lanes = plait_alloc_zero(a, 1, sizeof *lanes);
+	if (lanes == NULL) {
+		return false;
+	}
+	block->lanes = lanes;
+	size_t n = (size_t)(rows > 0 ? rows : 1), m = (size_t)(other_tethers > 0 ? other_tethers : 1);
+	row_key *keys = plait_alloc_zero(a, n, sizeof *keys);
+	lanes->particle = plait_alloc_zero(a, n, sizeof(int));
+	lanes->first = plait_alloc_zero(a, n, sizeof(int));
+	lanes->length[0] = plait_alloc_zero(a, n, sizeof(float));
+	lanes->length[1] = plait_alloc_zero(a, n, sizeof(float));
+	lanes->stiffness = plait_alloc_zero(a, n, sizeof(float));
+	lanes->runs = plait_alloc_zero(a, n, sizeof(tether_run));
+	lanes->others.pair = plait_alloc_zero(a, m, sizeof *lanes->others.pair);
+	lanes->others.length = plait_alloc_zero(a, m, sizeof(float));
+	lanes->others.stiffness = plait_alloc_zero(a, m, sizeof(float));
+	if (keys == NULL || lanes->particle == NULL || lanes->first == NULL || lanes->length[0] == NULL ||
+	    lanes->length[1] == NULL || lanes->stiffness == NULL || lanes->runs == NULL ||
+	    lanes->others.pair == NULL || lanes->others.length == NULL || lanes->others.stiffness == NULL) {
+		plait_free(a, keys);
+		plait_tether_lanes_destroy(block, a);
+		return false;
+	}
+	rows = 0;
+	plait_tether_block *others = &lanes->others;
+	for (int first = 0, end; first < block->count; first = end) {
+		end = row_end(block, first);
+		if (end - first == 2) {
+			keys[rows++] =
+			    (row_key){{block->pair[first][1], block->pair[first + 1][1]}, block->pair[first][0], first};
+			continue;
+		}
+		for (int c = first; c < end; ++c) {
+			int k = others->count++;
+			others->pair[k][0] = block->pair[c][0];
+			others->pair[k][1] = block->pair[c][1];
+			others->length[k] = block->length[c];
+			others->stiffness[k] = block->stiffness[c];
+		}
+	}
+	others->capacity = others->count;
+	qsort(keys, (size_t)rows, sizeof *keys, compare_rows);
+	for (int r = 0; r < rows; ++r) {
+		int first = keys[r].first;
+		lanes->particle[r] = keys[r].particle;
+		lanes->first[r] = first;
+		lanes->length[0][r] = block->length[first];
+		lanes->length[1][r] = block->length[first + 1];
+		lanes->stiffness[r] = block->stiffness[first];
+		if (r == 0 || keys[r].anchor[0] != keys[r - 1].anchor[0] ||
+		    keys[r].anchor[1] != keys[r - 1].anchor[1]) {
+			lanes->runs[runs++] = (tether_run){{keys[r].anchor[0], keys[r].anchor[1]}, r, r};
+		}
+		lanes->runs[runs - 1].end = r + 1;
+	}
+	lanes->count = rows;
+	lanes->run_count = runs;
+	plait_free(a, keys);
+	return true;
+}
+
+/* A batch of rows of one run. First, over every row, which are taut (in a loop without
+ * branches: slack rows come in patches the branch predictor cannot learn); then the taut ones,
+ * packed, lane by lane over coordinate arrays with selects instead of branches, which the
+ * compiler vectorises. As project_row: the projection onto the worst tether if it lies within
+ * the other's reach; else, in float, the projection onto the other if it lies within the
+ * first's, else the nearest point of the circle where the two spheres meet, or the point where
+ * they touch (a vertex on the line between two pins, stretched as far as it goes). Each is kept
+ * only if it checks out within both reaches: a thin lens, a small circle from a difference of
+ * squares, loses too many digits in float. A lane none of whose candidates checks out goes to
  * project_row_exactly afterwards. */
-enum { PAIR_BATCH = 160 };
+enum { LANE_BATCH = 128 };
 
-typedef struct pair_batch {
-	int first[PAIR_BATCH]; /* the row's first tether */
-	float px[PAIR_BATCH], py[PAIR_BATCH], pz[PAIR_BATCH];
-	float ax[2][PAIR_BATCH], ay[2][PAIR_BATCH], az[2][PAIR_BATCH], length[2][PAIR_BATCH];
-	float stiffness[PAIR_BATCH];
-	/* Results: the new position, and whether it was found (else: the exact search). */
-	float qx[PAIR_BATCH], qy[PAIR_BATCH], qz[PAIR_BATCH];
-	int found[PAIR_BATCH];
-} pair_batch;
+typedef struct lane_batch {
+	float px[LANE_BATCH], py[LANE_BATCH], pz[LANE_BATCH], w[LANE_BATCH];
+	int taut[LANE_BATCH];
+	/* The taut rows, packed: which row, the position and lengths; results: the new position,
+	 * and whether it was found (else: the exact search). */
+	int row[LANE_BATCH];
+	float tx[LANE_BATCH], ty[LANE_BATCH], tz[LANE_BATCH], length[2][LANE_BATCH], stiffness[LANE_BATCH];
+	float qx[LANE_BATCH], qy[LANE_BATCH], qz[LANE_BATCH];
+	int found[LANE_BATCH];
+} lane_batch;
 
-PLAIT_VECTOR_CLONES static void solve_pair_batch(pair_batch *restrict batch, int count)
+PLAIT_VECTOR_CLONES static void find_taut(lane_batch *restrict batch, vec3 a0, vec3 a1,
+                                          const float *restrict length0, const float *restrict length1,
+                                          int count)
 {
 	for (int k = 0; k < count; ++k) {
 		vec3 p = {batch->px[k], batch->py[k], batch->pz[k]};
-		vec3 a0 = {batch->ax[0][k], batch->ay[0][k], batch->az[0][k]};
-		vec3 a1 = {batch->ax[1][k], batch->ay[1][k], batch->az[1][k]};
+		float d0_sq = v3_length_sq(v3_sub(p, a0)), d1_sq = v3_length_sq(v3_sub(p, a1));
+		batch->taut[k] =
+		    ((d0_sq > length0[k] * length0[k]) | (d1_sq > length1[k] * length1[k])) & (batch->w[k] != 0.0f);
+	}
+}
+
+PLAIT_VECTOR_CLONES static void solve_taut(lane_batch *restrict batch, vec3 a0, vec3 a1, int count)
+{
+	for (int k = 0; k < count; ++k) {
+		vec3 p = {batch->tx[k], batch->ty[k], batch->tz[k]};
 		float l0 = batch->length[0][k], l1 = batch->length[1][k];
 		vec3 d0 = v3_sub(p, a0), d1 = v3_sub(p, a1);
 		float d0_sq = v3_length_sq(d0), d1_sq = v3_length_sq(d1);
@@ -272,25 +425,27 @@ PLAIT_VECTOR_CLONES static void solve_pair_batch(pair_batch *restrict batch, int
 		vec3 d = v3_select(first_worst, d0, d1);
 		vec3 projected = v3_mul_add(w, w_length / plait_select(first_worst, r0, r1), d); /* r: |d| */
 		int within = within_reach(projected, o, o_length);
-		/* nearest_in_two_balls: the projection onto the other, then the circle. */
+		/* nearest_in_balls for two: the projection onto the other, then the circle. */
 		vec3 from_o = v3_select(first_worst, d1, d0);
 		float o_distance_sq = plait_select(first_worst, d1_sq, d0_sq);
 		vec3 onto_o = v3_mul_add(o, o_length / plait_select(first_worst, r1, r0), from_o);
 		int onto_o_fits = (o_distance_sq > o_length * o_length) & within_reach(onto_o, w, w_length);
 		vec3 axis = v3_sub(o, w);
 		float axis_sq = v3_length_sq(axis);
-		float safe_axis_sq = plait_select(axis_sq > 0.0f, axis_sq, 1.0f);
-		float along = 0.5f * (1.0f + (w_length * w_length - o_length * o_length) / safe_axis_sq);
-		float radius_sq = w_length * w_length - along * along * safe_axis_sq;
+		float inverse_axis_sq = 1.0f / plait_select(axis_sq > 0.0f, axis_sq, 1.0f);
+		float along = 0.5f * (1.0f + (w_length * w_length - o_length * o_length) * inverse_axis_sq);
+		float radius_sq = w_length * w_length - along * along * axis_sq;
 		vec3 centre = v3_mul_add(w, along, axis);
 		vec3 offset = v3_sub(p, centre);
-		vec3 in_plane = v3_mul_add(offset, -v3_dot(offset, axis) / safe_axis_sq, axis);
+		vec3 in_plane = v3_mul_add(offset, -v3_dot(offset, axis) * inverse_axis_sq, axis);
 		float in_plane_length = v3_length(in_plane);
 		float safe_length = plait_select(in_plane_length > 1e-12f, in_plane_length, 1.0f);
-		vec3 on_circle = v3_mul_add(
-		    centre, sqrtf(plait_select(radius_sq > 0.0f, radius_sq, 0.0f)) / safe_length, in_plane);
-		int circle_fits = (axis_sq > 0.0f) & (radius_sq > 0.0f) & (in_plane_length > 1e-12f) &
-		                  within_reach(on_circle, w, w_length) & within_reach(on_circle, o, o_length);
+		/* Touching spheres (radius_sq <= 0 by rounding) meet at the centre. */
+		float reach = plait_select((radius_sq > 0.0f) & (in_plane_length > 1e-12f),
+		                           sqrtf(plait_maxf(radius_sq, 0.0f)) / safe_length, 0.0f);
+		vec3 on_circle = v3_mul_add(centre, reach, in_plane);
+		int circle_fits =
+		    (axis_sq > 0.0f) & within_reach(on_circle, w, w_length) & within_reach(on_circle, o, o_length);
 		vec3 q = v3_select(within, projected, v3_select(onto_o_fits, onto_o, on_circle));
 		q = v3_select(none, p, v3_lerp(p, q, batch->stiffness[k]));
 		batch->qx[k] = q.x;
@@ -300,25 +455,61 @@ PLAIT_VECTOR_CLONES static void solve_pair_batch(pair_batch *restrict batch, int
 	}
 }
 
-static void finish_pair_batch(const plait_tether_block *block, plait_point *points, pair_batch *batch,
-                              int count)
-{
-	solve_pair_batch(batch, count);
-	for (int k = 0; k < count; ++k) {
-		int first = batch->first[k];
-		if (batch->found[k]) {
-			points[block->pair[first][0]].x = v3(batch->qx[k], batch->qy[k], batch->qz[k]);
-		} else {
-			project_row_exactly(block, points, first, first + 2);
-		}
-	}
-}
-
 typedef struct tether_job {
 	plait_tether_block *block;
 	plait_point *points;
 	bool fixed_anchors;
 } tether_job;
+
+/* Rows [begin, end) of the lanes; each writes its own particle only. */
+static void lane_range(void *context, int begin, int end)
+{
+	tether_job *job = context;
+	const plait_tether_block *block = job->block;
+	const plait_tether_lanes *lanes = block->lanes;
+	plait_point *points = job->points;
+	int r = 0;
+	while (lanes->runs[r].end <= begin) {
+		++r; /* few runs: one per pair of pins that are some vertex's two nearest */
+	}
+	lane_batch batch;
+	for (; r < lanes->run_count && lanes->runs[r].begin < end; ++r) {
+		const tether_run *run = &lanes->runs[r];
+		vec3 a0 = points[run->anchor[0]].x, a1 = points[run->anchor[1]].x;
+		int run_begin = run->begin > begin ? run->begin : begin, run_end = run->end < end ? run->end : end;
+		for (int b = run_begin; b < run_end; b += LANE_BATCH) {
+			int count = run_end - b < LANE_BATCH ? run_end - b : LANE_BATCH;
+			const int *particle = lanes->particle + b;
+			for (int k = 0; k < count; ++k) {
+				plait_load_point(&points[particle[k]], &batch.px[k], &batch.py[k], &batch.pz[k], &batch.w[k]);
+			}
+			const float *length0 = lanes->length[0] + b, *length1 = lanes->length[1] + b;
+			find_taut(&batch, a0, a1, length0, length1, count);
+			int taut = 0;
+			for (int k = 0; k < count; ++k) {
+				/* Written for every row, kept for the taut: packing without branches. */
+				batch.row[taut] = k;
+				batch.tx[taut] = batch.px[k];
+				batch.ty[taut] = batch.py[k];
+				batch.tz[taut] = batch.pz[k];
+				batch.length[0][taut] = length0[k];
+				batch.length[1][taut] = length1[k];
+				batch.stiffness[taut] = lanes->stiffness[b + k];
+				taut += batch.taut[k];
+			}
+			solve_taut(&batch, a0, a1, taut);
+			for (int t = 0; t < taut; ++t) {
+				int k = batch.row[t];
+				if (batch.found[t]) {
+					plait_store_point(&points[particle[k]], batch.qx[t], batch.qy[t], batch.qz[t],
+					                  batch.w[k]);
+				} else {
+					project_row_exactly(block, points, lanes->first[b + k], lanes->first[b + k] + 2);
+				}
+			}
+		}
+	}
+}
 
 static void tether_range(void *context, int begin, int end)
 {
@@ -347,8 +538,6 @@ static void tether_range(void *context, int begin, int end)
 	 * particle changes no other's test: anchors are pins. */
 	enum { CHUNK = 256 };
 	uint8_t taut[CHUNK + MAX_ROW];
-	pair_batch pair_lanes; /* a chunk holds at most (CHUNK + MAX_ROW) / 2 rows of two */
-	int pairs = 0;
 	for (int chunk = begin, chunk_end; chunk < end; chunk = chunk_end) {
 		/* Chunks end where a row does: each particle is tested and projected once. */
 		chunk_end = chunk + CHUNK < end ? chunk + CHUNK : end;
@@ -369,50 +558,36 @@ static void tether_range(void *context, int begin, int end)
 			while (first > chunk && block->pair[first - 1][0] == particle) {
 				--first;
 			}
-			int row_end = c + 1;
-			while (row_end < chunk_end && block->pair[row_end][0] == particle) {
-				++row_end;
+			int end_of_row = c + 1;
+			while (end_of_row < chunk_end && block->pair[end_of_row][0] == particle) {
+				++end_of_row;
 			}
-			if (row_end - first == 2) {
-				if (points[particle].w != 0.0f) {
-					int lane = pairs++;
-					pair_lanes.first[lane] = first;
-					vec3 x = points[particle].x;
-					pair_lanes.px[lane] = x.x;
-					pair_lanes.py[lane] = x.y;
-					pair_lanes.pz[lane] = x.z;
-					for (int m = 0; m < 2; ++m) {
-						vec3 a = points[block->pair[first + m][1]].x;
-						pair_lanes.ax[m][lane] = a.x;
-						pair_lanes.ay[m][lane] = a.y;
-						pair_lanes.az[m][lane] = a.z;
-						pair_lanes.length[m][lane] = block->length[first + m];
-					}
-					pair_lanes.stiffness[lane] = block->stiffness[first];
-				}
-			} else if (row_end - first == 1 || row_end - first > MAX_ROW) {
-				for (int k = first; k < row_end; ++k) {
+			if (end_of_row - first == 1 || end_of_row - first > MAX_ROW) {
+				for (int k = first; k < end_of_row; ++k) {
 					project_tether(block, points, k);
 				}
 			} else {
-				project_row(block, points, first, row_end);
+				project_row(block, points, first, end_of_row);
 			}
-			c = row_end - 1;
-		}
-		if (pairs > 0) {
-			finish_pair_batch(block, points, &pair_lanes, pairs);
-			pairs = 0;
+			c = end_of_row - 1;
 		}
 	}
 }
 
-void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles)
+void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles,
+                               const plait_allocator *allocator)
 {
 	bool fixed_anchors = true;
 	for (int c = 0; c < block->count && fixed_anchors; ++c) {
 		fixed_anchors = particles->point[block->pair[c][1]].w == 0.0f;
 	}
 	block->fixed_anchors = fixed_anchors;
+	if (block->lanes_stale || (fixed_anchors && block->lanes == NULL && block->count > 0)) {
+		block->lanes_stale = false;
+		if (!derive_lanes(block, allocator)) {
+			block->lanes = NULL; /* solved as stored, more slowly */
+		}
+	}
 }
 
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel)
@@ -420,10 +595,19 @@ void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, 
 	/* Tethers are anchored at pins: then each particle's tethers write that particle only and
 	 * particles can run side by side. An anchor set free since (its pin released) is written
 	 * too, and then they run in order, each tether on its own. */
-	tether_job job = {block, particles->point, block->fixed_anchors};
-	if (block->fixed_anchors) {
-		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
-	} else {
+	if (!block->fixed_anchors) {
+		tether_job job = {block, particles->point, false};
 		tether_range(&job, 0, block->count);
+		return;
 	}
+	if (block->lanes == NULL) {
+		tether_job job = {block, particles->point, true};
+		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
+		return;
+	}
+	plait_tether_lanes *lanes = block->lanes;
+	tether_job rows = {block, particles->point, true};
+	plait_parallel_for(parallel, lane_range, &rows, 0, lanes->count, TETHER_GRAIN);
+	tether_job others = {&lanes->others, particles->point, true};
+	plait_parallel_for(parallel, tether_range, &others, 0, lanes->others.count, TETHER_GRAIN);
 }

@@ -245,6 +245,7 @@ bool plait_build_tethers(plait_sim *sim, const plait_topology *t, const vec3 *x,
 			sim->tether.stiffness[c] = stiffness;
 		}
 	}
+	sim->tether.lanes_stale = true;
 	plait_free(a, table.anchor);
 	plait_free(a, table.distance);
 	plait_free(a, table.count);
