@@ -72,26 +72,9 @@ static bool materials_pair_up(const plait_material *a, const plait_material *b)
 	return a->type == PLAIT_OBJECT_PARTICLES && a->self_collide;
 }
 
-/* What rested on a plane collider in the last substep is held by it in this one (see
- * surface_contact.c); contacts of this substep start afresh. Particles are independent here,
- * so ranges of them run on the workers. */
-static void clear_contact_flags(void *context, int begin, int end)
-{
-	plait_particles *p = &((plait_sim *)context)->particles;
-	for (int i = begin; i < end; ++i) {
-		uint8_t flags = p->flags[i] & (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED |
-		                                          PLAIT_PARTICLE_ON_PLANE);
-		p->flags[i] =
-		    (p->flags[i] & PLAIT_PARTICLE_ON_PLANE) ? (uint8_t)(flags | PLAIT_PARTICLE_SUPPORTED) : flags;
-	}
-}
-
-#define FLAG_GRAIN 4096
-
 bool plait_contacts_begin_substep(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
-	plait_parallel_for(&sim->parallel, clear_contact_flags, sim, 0, p->count, FLAG_GRAIN);
 	sim->pair_contact_count = 0;
 	if (!plait_mesh_contacts_prepare(sim, &sim->mesh_contacts_active)) {
 		return false;
@@ -529,113 +512,153 @@ static int finish_sphere_batch(collider_job *job, sphere_batch *batch, int count
 	return contacts;
 }
 
-static void collide_collider_range(void *context, int begin, int end)
+/* Whether particle i's path over the substep may reach the collider: inside its world box and
+ * its ball (for a round collider most of the box is out of it). */
+static inline int path_may_reach(const collider_job *job, vec3 a, vec3 b)
 {
-	collider_job *job = context;
+	vec3 lower = job->world_lower, upper = job->world_upper;
+	int in_box = (plait_maxf(a.x, b.x) >= lower.x) & (plait_minf(a.x, b.x) <= upper.x) &
+	             (plait_maxf(a.y, b.y) >= lower.y) & (plait_minf(a.y, b.y) <= upper.y) &
+	             (plait_maxf(a.z, b.z) >= lower.z) & (plait_minf(a.z, b.z) <= upper.z);
+	/* The ball around the path (its midpoint, half its length) must reach the collider's. */
+	float reach = job->ball_radius + 0.5f * v3_length(v3_sub(b, a));
+	int in_ball = v3_length_sq(v3_sub(v3_scale(v3_add(a, b), 0.5f), job->ball_centre)) <= reach * reach;
+	return in_box & in_ball;
+}
+
+/* The cull of a bounded collider over particles [begin, begin + count), in a loop without
+ * branches (the particles that reach it come in patches the branch predictor cannot learn):
+ * into near[], those that take part and may reach it; returns how many. */
+enum { CULL_CHUNK = 256 };
+
+PLAIT_VECTOR_CLONES static int cull_particles(const collider_job *restrict job, const plait_particles *p,
+                                              int begin, int count, int *restrict near)
+{
+	int keep[CULL_CHUNK];
+	const plait_point *point = p->point + begin;
+	const vec3 *x_prev = p->x_prev + begin;
+	const uint8_t *flags = p->flags + begin;
+	for (int k = 0; k < count; ++k) {
+		keep[k] = ((flags[k] & PLAIT_PARTICLE_COLLIDE) != 0) & (point[k].w != 0.0f) &
+		          path_may_reach(job, x_prev[k], point[k].x);
+	}
+	int n = 0;
+	for (int k = 0; k < count; ++k) {
+		near[n] = begin + k; /* written for every particle, kept for those that reach */
+		n += keep[k];
+	}
+	return n;
+}
+
+/* Particle i against the collider: a sphere's particles go into its batch (solved when full),
+ * the others are solved here. Returns the contacts that moved it. */
+static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *batch_count)
+{
 	plait_sim *sim = job->sim;
 	const plait_collider *c = job->c;
 	plait_particles *p = &sim->particles;
 	const plait_rigid *r0 = &c->rigid_start, *r1 = &c->rigid_end;
-	float inverse_scale = 1.0f / r1->scale;
+	const plait_material *mat = &sim->materials[p->material[i]];
+	/* Everything in the collider's own space: there the collider stands still and the
+	 * particle moves along a straight line from p0 to p1. */
+	bool identity = job->identity;
+	vec3 p0 = identity ? p->x_prev[i] : plait_rigid_apply_inverse(r0, p->x_prev[i]);
+	vec3 p1 = identity ? p->point[i].x : plait_rigid_apply_inverse(r1, p->point[i].x);
+	float radius = (p->radius[i] + c->thickness) * (1.0f / r1->scale);
+	if (batch != NULL) {
+		int lane = (*batch_count)++;
+		batch->particle[lane] = i;
+		lane_set(&batch->p0, lane, p0);
+		lane_set(&batch->p1, lane, p1);
+		batch->radius[lane] = radius;
+		batch->friction[lane] = plait_combined_friction(mat->friction, c->friction);
+		if (*batch_count < SPHERE_BATCH) {
+			return 0;
+		}
+		*batch_count = 0;
+		return finish_sphere_batch(job, batch, SPHERE_BATCH);
+	}
 	float inverse_h = 1.0f / sim->substep_time;
-	bool bounded = job->bounded;
-	vec3 world_lower = job->world_lower, world_upper = job->world_upper;
+	if (c->shape.type == PLAIT_SHAPE_MESH) {
+		vec3 normal, motion;
+		float friction = plait_combined_friction(mat->friction, c->friction);
+		if (!collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, sim->substep == 0, &normal,
+		                             &motion)) {
+			return 0;
+		}
+		/* Where the touched surface point was at the substep's start, to where it is. */
+		vec3 surface_velocity =
+		    v3_scale(v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, v3_sub(p1, motion))), inverse_h);
+		p->point[i].x = plait_rigid_apply(r1, p1);
+		record_collider_contact(p, i, plait_rigid_rotate(r1, normal), surface_velocity,
+		                        0.5f * (mat->bounce + c->bounce), 0.5f * (mat->stickiness + c->stickiness));
+		return 1;
+	}
+	float toi;
+	if (!plait_shape_sweep(&c->shape, p0, p1, radius, &toi)) {
+		return 0;
+	}
+	vec3 hit = v3_lerp(p0, p1, toi);
+	vec3 normal;
+	float distance = plait_shape_distance(&c->shape, hit, &normal);
+	if (toi == 0.0f && distance < radius) {
+		/* Started inside the thickened shape (trapped): push out along the normal at the end
+		 * position instead, which for the convex shapes here leads straight out. */
+		distance = plait_shape_distance(&c->shape, p1, &normal);
+		hit = p1;
+	}
+	vec3 surface = v3_mul_add(hit, -distance, normal);
+	float depth = radius - v3_dot(v3_sub(p1, surface), normal);
+	vec3 surface_velocity = v3(0.0f, 0.0f, 0.0f);
+	if (!job->still) {
+		vec3 surface_world = plait_rigid_apply(r1, surface);
+		surface_velocity = v3_scale(v3_sub(surface_world, plait_rigid_apply(r0, surface)), inverse_h);
+	}
+	vec3 normal_world = identity ? normal : plait_rigid_rotate(r1, normal);
+	float bounce = 0.5f * (mat->bounce + c->bounce);
+	float stickiness = 0.5f * (mat->stickiness + c->stickiness);
+	if (depth <= 0.0f) {
+		/* Touching within the tolerance of the sweep but not inside: still a contact for
+		 * restitution and stickiness, no correction. */
+		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
+		return 0;
+	}
+	float friction = plait_combined_friction(mat->friction, c->friction);
+	vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
+	p->point[i].x = identity ? v3_add(p1, correction) : plait_rigid_apply(r1, v3_add(p1, correction));
+	record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
+	if (c->shape.type == PLAIT_SHAPE_PLANE) {
+		p->flags[i] |= PLAIT_PARTICLE_ON_PLANE;
+	}
+	return 1;
+}
+
+static void collide_collider_range(void *context, int begin, int end)
+{
+	collider_job *job = context;
+	plait_particles *p = &job->sim->particles;
 	int contacts = 0;
 	sphere_batch sphere_lanes;
-	sphere_batch *batch = c->shape.type == PLAIT_SHAPE_SPHERE ? &sphere_lanes : NULL;
+	sphere_batch *batch = job->c->shape.type == PLAIT_SHAPE_SPHERE ? &sphere_lanes : NULL;
 	int batch_count = 0;
-	for (int k = begin; k < end; ++k) {
-		int i = job->indices != NULL ? job->indices[k] : k;
-		if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->point[i].w == 0.0f) {
-			continue;
+	if (job->bounded && job->indices == NULL) {
+		int near[CULL_CHUNK];
+		for (int chunk = begin; chunk < end; chunk += CULL_CHUNK) {
+			int count =
+			    cull_particles(job, p, chunk, end - chunk < CULL_CHUNK ? end - chunk : CULL_CHUNK, near);
+			for (int k = 0; k < count; ++k) {
+				contacts += collide_particle(job, near[k], batch, &batch_count);
+			}
 		}
-		if (bounded) {
-			vec3 a = p->x_prev[i], b = p->point[i].x;
-			if (plait_maxf(a.x, b.x) < world_lower.x || plait_minf(a.x, b.x) > world_upper.x ||
-			    plait_maxf(a.y, b.y) < world_lower.y || plait_minf(a.y, b.y) > world_upper.y ||
-			    plait_maxf(a.z, b.z) < world_lower.z || plait_minf(a.z, b.z) > world_upper.z) {
+	} else {
+		for (int k = begin; k < end; ++k) {
+			int i = job->indices != NULL ? job->indices[k] : k;
+			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) || p->point[i].w == 0.0f ||
+			    (job->bounded && !path_may_reach(job, p->x_prev[i], p->point[i].x))) {
 				continue;
 			}
-			/* The ball around the path (its midpoint, half its length) must reach the
-			 * collider's: for a round collider most of the box is out of it. */
-			float reach = job->ball_radius + 0.5f * v3_length(v3_sub(b, a));
-			if (v3_length_sq(v3_sub(v3_scale(v3_add(a, b), 0.5f), job->ball_centre)) > reach * reach) {
-				continue;
-			}
+			contacts += collide_particle(job, i, batch, &batch_count);
 		}
-		const plait_material *mat = &sim->materials[p->material[i]];
-		/* Everything in the collider's own space: there the collider stands still and the
-		 * particle moves along a straight line from p0 to p1. */
-		bool identity = job->identity;
-		vec3 p0 = identity ? p->x_prev[i] : plait_rigid_apply_inverse(r0, p->x_prev[i]);
-		vec3 p1 = identity ? p->point[i].x : plait_rigid_apply_inverse(r1, p->point[i].x);
-		float radius = (p->radius[i] + c->thickness) * inverse_scale;
-		if (batch != NULL) {
-			int lane = batch_count++;
-			batch->particle[lane] = i;
-			lane_set(&batch->p0, lane, p0);
-			lane_set(&batch->p1, lane, p1);
-			batch->radius[lane] = radius;
-			batch->friction[lane] = plait_combined_friction(mat->friction, c->friction);
-			if (batch_count == SPHERE_BATCH) {
-				contacts += finish_sphere_batch(job, batch, batch_count);
-				batch_count = 0;
-			}
-			continue;
-		}
-		if (c->shape.type == PLAIT_SHAPE_MESH) {
-			vec3 normal, motion;
-			float friction = plait_combined_friction(mat->friction, c->friction);
-			if (collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, sim->substep == 0, &normal,
-			                            &motion)) {
-				/* Where the touched surface point was at the substep's start, to where it is. */
-				vec3 surface_velocity = v3_scale(
-				    v3_sub(plait_rigid_apply(r1, p1), plait_rigid_apply(r0, v3_sub(p1, motion))), inverse_h);
-				p->point[i].x = plait_rigid_apply(r1, p1);
-				record_collider_contact(p, i, plait_rigid_rotate(r1, normal), surface_velocity,
-				                        0.5f * (mat->bounce + c->bounce),
-				                        0.5f * (mat->stickiness + c->stickiness));
-				++contacts;
-			}
-			continue;
-		}
-		float toi;
-		if (!plait_shape_sweep(&c->shape, p0, p1, radius, &toi)) {
-			continue;
-		}
-		vec3 hit = v3_lerp(p0, p1, toi);
-		vec3 normal;
-		float distance = plait_shape_distance(&c->shape, hit, &normal);
-		if (toi == 0.0f && distance < radius) {
-			/* Started inside the thickened shape (trapped): push out along the normal at the
-			 * end position instead, which for the convex shapes here leads straight out. */
-			distance = plait_shape_distance(&c->shape, p1, &normal);
-			hit = p1;
-		}
-		vec3 surface = v3_mul_add(hit, -distance, normal);
-		float depth = radius - v3_dot(v3_sub(p1, surface), normal);
-		vec3 surface_velocity = v3(0.0f, 0.0f, 0.0f);
-		if (!job->still) {
-			vec3 surface_world = plait_rigid_apply(r1, surface);
-			surface_velocity = v3_scale(v3_sub(surface_world, plait_rigid_apply(r0, surface)), inverse_h);
-		}
-		vec3 normal_world = identity ? normal : plait_rigid_rotate(r1, normal);
-		float bounce = 0.5f * (mat->bounce + c->bounce);
-		float stickiness = 0.5f * (mat->stickiness + c->stickiness);
-		if (depth <= 0.0f) {
-			/* Touching within the tolerance of the sweep but not inside: still a contact for
-			 * restitution and stickiness, no correction. */
-			record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
-			continue;
-		}
-		float friction = plait_combined_friction(mat->friction, c->friction);
-		vec3 correction = contact_correction(normal, depth, v3_sub(p1, p0), friction);
-		p->point[i].x = identity ? v3_add(p1, correction) : plait_rigid_apply(r1, v3_add(p1, correction));
-		record_collider_contact(p, i, normal_world, surface_velocity, bounce, stickiness);
-		if (c->shape.type == PLAIT_SHAPE_PLANE) {
-			p->flags[i] |= PLAIT_PARTICLE_ON_PLANE;
-		}
-		++contacts;
 	}
 	if (batch_count > 0) {
 		contacts += finish_sphere_batch(job, batch, batch_count);
@@ -764,7 +787,8 @@ static int collide_pair(plait_sim *sim, int i, int j)
 		contact->i = i;
 		contact->j = j;
 		contact->normal = normal;
-		contact->approach_speed = v3_dot(v3_sub(p->v_pre[j], p->v_pre[i]), normal);
+		/* v holds the velocity before the constraints until the substep ends. */
+		contact->approach_speed = v3_dot(v3_sub(p->v[j], p->v[i]), normal);
 		contact->bounce = 0.5f * (mi->bounce + mj->bounce);
 	}
 	return 1;
@@ -918,43 +942,34 @@ int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int 
 
 /* Below this approach speed a contact is resting, not bouncing: gravity's pull over two
  * substeps, so resting particles do not jitter. */
-static float resting_speed_of(const plait_sim *sim)
+float plait_resting_speed(const plait_sim *sim)
 {
 	return 2.0f * v3_length(sim->settings.gravity) * sim->substep_time + 1e-6f;
 }
 
-/* Restitution and stickiness of collider contacts: each particle on its own, on the workers. */
-static void respond_to_collider_contacts(void *context, int begin, int end)
+vec3 plait_respond_to_collider_contact(const plait_particles *p, int i, vec3 v_before, vec3 v,
+                                       float resting_speed)
 {
-	plait_sim *sim = context;
-	plait_particles *p = &sim->particles;
-	float resting_speed = resting_speed_of(sim);
-	for (int i = begin; i < end; ++i) {
-		if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) || p->point[i].w == 0.0f) {
-			continue;
+	vec3 n = p->contact_normal[i];
+	vec3 surface_velocity = p->contact_velocity[i];
+	float approach = v3_dot(v3_sub(v_before, surface_velocity), n);
+	float normal_speed = v3_dot(v3_sub(v, surface_velocity), n);
+	float bounce = p->contact_bounce[i];
+	if (bounce > 0.0f && approach < -resting_speed) {
+		float target = -bounce * approach;
+		if (normal_speed < target) {
+			v = v3_mul_add(v, target - normal_speed, n);
 		}
-		vec3 n = p->contact_normal[i];
-		vec3 surface_velocity = p->contact_velocity[i];
-		float approach = v3_dot(v3_sub(p->v_pre[i], surface_velocity), n);
-		float normal_speed = v3_dot(v3_sub(p->v[i], surface_velocity), n);
-		float bounce = p->contact_bounce[i];
-		if (bounce > 0.0f && approach < -resting_speed) {
-			float target = -bounce * approach;
-			if (normal_speed < target) {
-				p->v[i] = v3_mul_add(p->v[i], target - normal_speed, n);
-				normal_speed = target;
-			}
-		} else if (normal_speed > 0.0f && p->contact_stickiness[i] > 0.0f) {
-			p->v[i] = v3_mul_add(p->v[i], -normal_speed * p->contact_stickiness[i], n);
-		}
+	} else if (normal_speed > 0.0f && p->contact_stickiness[i] > 0.0f) {
+		v = v3_mul_add(v, -normal_speed * p->contact_stickiness[i], n);
 	}
+	return v;
 }
 
 void plait_contacts_end_substep(plait_sim *sim)
 {
 	plait_particles *p = &sim->particles;
-	plait_parallel_for(&sim->parallel, respond_to_collider_contacts, sim, 0, p->count, FLAG_GRAIN);
-	float resting_speed = resting_speed_of(sim);
+	float resting_speed = plait_resting_speed(sim);
 	for (int c = 0; c < sim->pair_contact_count; ++c) {
 		const plait_particle_contact *contact = &sim->pair_contacts[c];
 		int i = contact->i, j = contact->j;

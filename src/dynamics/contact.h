@@ -21,7 +21,8 @@ float plait_combined_friction(float a, float b);
 /* Interpolates the collider transforms for the substep [t0, t1] (fractions of the frame). */
 void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1);
 
-/* Clears the contact records of the substep and decides which particles pair up. */
+/* Decides which particles pair up in the substep and clears its pair contacts. (Each
+ * particle's contact flags are cleared as the substep begins: solver.c.) */
 bool plait_contacts_begin_substep(plait_sim *sim);
 
 /* One collision iteration. */
@@ -31,8 +32,17 @@ void plait_collide(plait_sim *sim);
  * failsafe moved them). */
 int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count);
 
-/* Restitution and stickiness on the contacts of the substep (after v = (x - x_prev) / h). */
+/* Restitution on the particle-pair contacts of the substep (after v = (x - x_prev) / h). */
 void plait_contacts_end_substep(plait_sim *sim);
+
+/* Below this approach speed (scene units / s) a contact rests rather than bounces. */
+float plait_resting_speed(const plait_sim *sim);
+
+/* Restitution and stickiness of particle i's collider contact in the substep (it has
+ * PLAIT_PARTICLE_CONTACT): its velocity v after the substep, from v_before, the velocity it
+ * had before the constraints. */
+vec3 plait_respond_to_collider_contact(const plait_particles *p, int i, vec3 v_before, vec3 v,
+                                       float resting_speed);
 
 /* Vertices deeper than a tolerance inside any collider, at the current positions. */
 int plait_count_penetrations(const plait_sim *sim);

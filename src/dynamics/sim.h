@@ -87,7 +87,6 @@ typedef struct plait_particles {
 	plait_point *point; /* position and inverse mass; 16-byte aligned */
 	vec3 *x_prev;       /* position at the start of the current substep */
 	vec3 *v;            /* velocity, scene units per second */
-	vec3 *v_pre;        /* velocity after external forces, before constraints (restitution) */
 	float *mass;        /* kg, kept while pinned */
 	float *radius;      /* collision radius, scene units */
 	int *material;

@@ -42,7 +42,6 @@ static void free_particles(plait_sim *sim)
 	void *fields[] = {p->point,
 	                  p->x_prev,
 	                  p->v,
-	                  p->v_pre,
 	                  p->mass,
 	                  p->radius,
 	                  p->material,
@@ -121,7 +120,6 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 	bool ok = grow_array(a, (void **)&p->point, sizeof(plait_point), n, capacity) &&
 	          grow_array(a, (void **)&p->x_prev, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->v, sizeof(vec3), n, capacity) &&
-	          grow_array(a, (void **)&p->v_pre, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->mass, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->radius, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->material, sizeof(int), n, capacity) &&
@@ -275,7 +273,6 @@ int plait_sim_add_particle(plait_sim *sim, vec3 position, vec3 velocity, float m
 	p->point[i].x = position;
 	p->x_prev[i] = position;
 	p->v[i] = velocity;
-	p->v_pre[i] = velocity;
 	p->mass[i] = mass;
 	p->point[i].w = (flags & PLAIT_PARTICLE_PINNED) ? 0.0f : 1.0f / mass;
 	p->radius[i] = radius;
@@ -339,7 +336,6 @@ bool plait_sim_compact(plait_sim *sim, const bool *keep)
 		p->point[kept] = p->point[i];
 		p->x_prev[kept] = p->x_prev[i];
 		p->v[kept] = p->v[i];
-		p->v_pre[kept] = p->v_pre[i];
 		p->mass[kept] = p->mass[i];
 		p->radius[kept] = p->radius[i];
 		p->material[kept] = p->material[i];

@@ -75,7 +75,9 @@ typedef struct particle_job {
  * their interpolated targets, free ones to their predicted positions. v then holds the
  * end-of-substep velocity; moving with v - h g / 2, the mean velocity over the substep under
  * constant gravity, makes free flight exact (x0 + v0 t + g t^2 / 2) instead of off by
- * g h t / 2. */
+ * g h t / 2. v keeps that value until update_velocities_range: collisions read it as the
+ * velocity before the constraints. The contacts of the last substep are forgotten; what rested
+ * on a plane collider in it is held by it in this one (see surface_contact.c). */
 static void begin_substep_range(void *context, int begin, int end)
 {
 	const particle_job *job = context;
@@ -87,35 +89,47 @@ static void begin_substep_range(void *context, int begin, int end)
 		plait_integrate_velocities(sim, h, true, begin, end);
 	}
 	vec3 gravity = sim->settings.gravity;
+	const uint8_t cleared =
+	    (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_ON_PLANE);
 	for (int i = begin; i < end; ++i) {
+		uint8_t flags = p->flags[i];
+		p->flags[i] =
+		    (uint8_t)((flags & cleared) | ((flags & PLAIT_PARTICLE_ON_PLANE) ? PLAIT_PARTICLE_SUPPORTED : 0));
 		p->x_prev[i] = p->point[i].x;
 		if (p->point[i].w == 0.0f) {
-			p->v_pre[i] = p->v[i];
 			p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], job->t_end);
 			continue;
 		}
 		/* Without air, plait_integrate_velocities in the same pass: gravity and damping. */
-		vec3 v = p->v[i];
 		if (!job->air) {
-			v = plait_damp_velocity(v3_mul_add(v, h, gravity), sim->materials[p->material[i]].damp, h);
-			p->v[i] = v;
+			p->v[i] =
+			    plait_damp_velocity(v3_mul_add(p->v[i], h, gravity), sim->materials[p->material[i]].damp, h);
 		}
-		p->v_pre[i] = v;
-		p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(v, half_gravity_step));
+		p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(p->v[i], half_gravity_step));
 	}
 }
 
 /* v = (x - x_prev) / h is the mean velocity of the substep; adding h g / 2 back gives the
- * velocity at its end (the inverse of the prediction above). */
+ * velocity at its end (the inverse of the prediction above). Then restitution and stickiness
+ * of the particle's collider contact, which compare it with the velocity before. */
 static void update_velocities_range(void *context, int begin, int end)
 {
 	const particle_job *job = context;
 	plait_particles *p = &job->sim->particles;
 	float inverse_h = 1.0f / job->h;
 	vec3 half_gravity_step = v3_scale(job->sim->settings.gravity, 0.5f * job->h);
+	float resting_speed = plait_resting_speed(job->sim);
 	for (int i = begin; i < end; ++i) {
 		vec3 mean = v3_scale(v3_sub(p->point[i].x, p->x_prev[i]), inverse_h);
-		p->v[i] = p->point[i].w > 0.0f ? v3_add(mean, half_gravity_step) : mean;
+		if (p->point[i].w == 0.0f) {
+			p->v[i] = mean;
+			continue;
+		}
+		vec3 v = v3_add(mean, half_gravity_step);
+		if (p->flags[i] & PLAIT_PARTICLE_CONTACT) {
+			v = plait_respond_to_collider_contact(p, i, p->v[i], v, resting_speed);
+		}
+		p->v[i] = v;
 	}
 }
 
