@@ -67,69 +67,90 @@ typedef struct particle_job {
 	plait_sim *sim;
 	float h, t_end;
 	bool air;
+	float resting_speed; /* of the substep ending, for the velocity update */
 } particle_job;
 
 #define PARTICLE_GRAIN 2048
 
-/* Start of a substep: velocities take gravity, air and damping; then pinned particles move to
- * their interpolated targets, free ones to their predicted positions. v then holds the
- * end-of-substep velocity; moving with v - h g / 2, the mean velocity over the substep under
- * constant gravity, makes free flight exact (x0 + v0 t + g t^2 / 2) instead of off by
- * g h t / 2. v keeps that value until update_velocities_range: collisions read it as the
- * velocity before the constraints. The contacts of the last substep are forgotten; what rested
- * on a plane collider in it is held by it in this one (see surface_contact.c). */
+/* Start of a substep for particle i: its velocity takes gravity and damping (air, when on, has
+ * been applied to the range already); then a pinned particle moves to its interpolated target,
+ * a free one to its predicted position. v then holds the end-of-substep velocity; moving with
+ * v - h g / 2, the mean velocity over the substep under constant gravity, makes free flight
+ * exact (x0 + v0 t + g t^2 / 2) instead of off by g h t / 2. v keeps that value until the
+ * velocity update: collisions read it as the velocity before the constraints. The contacts of
+ * the last substep are forgotten; what rested on a plane collider in it is held by it in this
+ * one (see surface_contact.c). */
+static inline void begin_particle(const particle_job *job, plait_particles *p, int i)
+{
+	const uint8_t cleared =
+	    (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_ON_PLANE);
+	uint8_t flags = p->flags[i];
+	p->flags[i] =
+	    (uint8_t)((flags & cleared) | ((flags & PLAIT_PARTICLE_ON_PLANE) ? PLAIT_PARTICLE_SUPPORTED : 0));
+	p->x_prev[i] = p->point[i].x;
+	if (p->point[i].w == 0.0f) {
+		p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], job->t_end);
+		return;
+	}
+	float h = job->h;
+	vec3 gravity = job->sim->settings.gravity;
+	/* Without air, plait_integrate_velocities in the same pass: gravity and damping. */
+	if (!job->air) {
+		p->v[i] =
+		    plait_damp_velocity(v3_mul_add(p->v[i], h, gravity), job->sim->materials[p->material[i]].damp, h);
+	}
+	p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(p->v[i], v3_scale(gravity, 0.5f * h)));
+}
+
+/* End of a substep for particle i: v = (x - x_prev) / h is the mean velocity of the substep;
+ * adding h g / 2 back gives the velocity at its end (the inverse of the prediction above).
+ * Then restitution and stickiness of its collider contact, which compare it with the velocity
+ * before. */
+static inline void end_particle(const particle_job *job, plait_particles *p, int i)
+{
+	vec3 mean = v3_scale(v3_sub(p->point[i].x, p->x_prev[i]), 1.0f / job->h);
+	if (p->point[i].w == 0.0f) {
+		p->v[i] = mean;
+		return;
+	}
+	vec3 v = v3_add(mean, v3_scale(job->sim->settings.gravity, 0.5f * job->h));
+	if (p->flags[i] & PLAIT_PARTICLE_CONTACT) {
+		v = plait_respond_to_collider_contact(p, i, p->v[i], v, job->resting_speed);
+	}
+	p->v[i] = v;
+}
+
 static void begin_substep_range(void *context, int begin, int end)
 {
 	const particle_job *job = context;
-	plait_sim *sim = job->sim;
-	plait_particles *p = &sim->particles;
-	float h = job->h;
-	vec3 half_gravity_step = v3_scale(sim->settings.gravity, 0.5f * h);
 	if (job->air) {
-		plait_integrate_velocities(sim, h, true, begin, end);
+		plait_integrate_velocities(job->sim, job->h, true, begin, end);
 	}
-	vec3 gravity = sim->settings.gravity;
-	const uint8_t cleared =
-	    (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_ON_PLANE);
+	plait_particles *p = &job->sim->particles;
 	for (int i = begin; i < end; ++i) {
-		uint8_t flags = p->flags[i];
-		p->flags[i] =
-		    (uint8_t)((flags & cleared) | ((flags & PLAIT_PARTICLE_ON_PLANE) ? PLAIT_PARTICLE_SUPPORTED : 0));
-		p->x_prev[i] = p->point[i].x;
-		if (p->point[i].w == 0.0f) {
-			p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], job->t_end);
-			continue;
-		}
-		/* Without air, plait_integrate_velocities in the same pass: gravity and damping. */
-		if (!job->air) {
-			p->v[i] =
-			    plait_damp_velocity(v3_mul_add(p->v[i], h, gravity), sim->materials[p->material[i]].damp, h);
-		}
-		p->point[i].x = v3_mul_add(p->point[i].x, h, v3_sub(p->v[i], half_gravity_step));
+		begin_particle(job, p, i);
 	}
 }
 
-/* v = (x - x_prev) / h is the mean velocity of the substep; adding h g / 2 back gives the
- * velocity at its end (the inverse of the prediction above). Then restitution and stickiness
- * of the particle's collider contact, which compare it with the velocity before. */
-static void update_velocities_range(void *context, int begin, int end)
+static void end_substep_range(void *context, int begin, int end)
 {
 	const particle_job *job = context;
 	plait_particles *p = &job->sim->particles;
-	float inverse_h = 1.0f / job->h;
-	vec3 half_gravity_step = v3_scale(job->sim->settings.gravity, 0.5f * job->h);
-	float resting_speed = plait_resting_speed(job->sim);
 	for (int i = begin; i < end; ++i) {
-		vec3 mean = v3_scale(v3_sub(p->point[i].x, p->x_prev[i]), inverse_h);
-		if (p->point[i].w == 0.0f) {
-			p->v[i] = mean;
-			continue;
-		}
-		vec3 v = v3_add(mean, half_gravity_step);
-		if (p->flags[i] & PLAIT_PARTICLE_CONTACT) {
-			v = plait_respond_to_collider_contact(p, i, p->v[i], v, resting_speed);
-		}
-		p->v[i] = v;
+		end_particle(job, p, i);
+	}
+}
+
+/* The end of one substep and the start of the next in one pass over the particles, when
+ * nothing runs between them that reads or writes them (no air, no particle-pair restitution):
+ * the same operations per particle, in the same order, with the particle's data read once. */
+static void end_and_begin_range(void *context, int begin, int end)
+{
+	const particle_job *job = context;
+	plait_particles *p = &job->sim->particles;
+	for (int i = begin; i < end; ++i) {
+		end_particle(job, p, i);
+		begin_particle(job, p, i);
 	}
 }
 
@@ -196,6 +217,7 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 	float inverse_h_squared = 1.0f / (h * h);
 	bool air = plait_air_active(sim);
 	sim->substep_time = h;
+	bool begun = false; /* the particles' part of this substep's start is done */
 	for (int s = 0; s < substeps; ++s) {
 		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;
 		sim->substep = s;
@@ -203,9 +225,11 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		if (air) {
 			plait_air_accumulate(sim, sim->time + (double)(t0 * frame_time));
 		}
-		particle_job job = {sim, h, t1, air};
-		plait_parallel_for(&sim->parallel, begin_substep_range, &job, 0, sim->particles.count,
-		                   PARTICLE_GRAIN);
+		particle_job job = {sim, h, t1, air, plait_resting_speed(sim)};
+		if (!begun) {
+			plait_parallel_for(&sim->parallel, begin_substep_range, &job, 0, sim->particles.count,
+			                   PARTICLE_GRAIN);
+		}
 		reset_multipliers(sim);
 		if (!plait_contacts_begin_substep(sim)) {
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
@@ -232,9 +256,18 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 			plait_mesh_contacts_failsafe(sim);
 			sim->collision_seconds += plait_seconds() - start;
 		}
-		plait_parallel_for(&sim->parallel, update_velocities_range, &job, 0, sim->particles.count,
-		                   PARTICLE_GRAIN);
-		plait_contacts_end_substep(sim);
+		/* The velocity update; with the next substep's start when nothing comes between. */
+		begun = s + 1 < substeps && !air && sim->pair_contact_count == 0;
+		if (begun) {
+			particle_job both = job;
+			both.t_end = (float)(s + 2) / (float)substeps;
+			plait_parallel_for(&sim->parallel, end_and_begin_range, &both, 0, sim->particles.count,
+			                   PARTICLE_GRAIN);
+		} else {
+			plait_parallel_for(&sim->parallel, end_substep_range, &job, 0, sim->particles.count,
+			                   PARTICLE_GRAIN);
+			plait_contacts_end_substep(sim);
+		}
 	}
 	return PLAIT_OK;
 }
