@@ -9,6 +9,7 @@
 
 #include "collide_scenes.h"
 #include "test_support.h"
+#include "world/world.h"
 
 typedef struct scene_totals {
 	int worst_crossings, crossing_frames, worst_inside, ccd_hits, failsafe;
@@ -166,6 +167,140 @@ static plait_world_id weightless_world(void)
 	def.air_density = 0.0f;
 	def.fps = 60.0f;
 	return plait_create_world(&def, NULL);
+}
+
+/* A sheet of large quads (0.5 m) dropped on a box narrower than one of them (0.3 m): no vertex
+ * of the sheet ever meets the box, so only the box's own corners and edges against the sheet's
+ * triangles and edges keep it from poking through. Met through the vertices alone, the box
+ * went through the sheet, which fell flat on the ground around it. */
+static void drop_coarse_sheet_on(plait_collider_def *obstacle, float top)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_error error;
+	plait_collider_def ground = plait_default_collider_def();
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, &error)), "%s", error.message);
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, obstacle, &error)), "%s", error.message);
+	test_grid grid = test_grid_make(4, 4, 2.0f, 2.0f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		/* The box's top lies inside the middle of one quad. */
+		grid.positions[i].x += 0.25f;
+		grid.positions[i].z += 0.25f;
+		grid.positions[i].y = 0.6f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.01f;
+	plait_object_id cloth = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	for (int frame = 1; frame <= 90; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_intersection_report report;
+		cr_assert_eq(plait_world_check_intersections(world, &report, &error), PLAIT_OK);
+		cr_assert_eq(report.triangle_pairs, 0, "frame %d: the box crosses %d of the sheet's triangles", frame,
+		             report.triangle_pairs);
+		cr_assert_eq(report.inside_colliders, 0, "frame %d", frame);
+	}
+	/* The sheet rests on the box: the quad over it stays up, its lowest point above the box. */
+	plait_vec3 x[25];
+	plait_object_get_positions(cloth, 0, 25, x, NULL);
+	float highest = -INFINITY;
+	for (int i = 0; i < 25; ++i) {
+		highest = fmaxf(highest, x[i].y);
+	}
+	cr_assert_gt(highest, 0.5f * top, "the sheet lies flat (highest vertex at %g m)", (double)highest);
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+}
+
+Test(collide, a_box_narrower_than_the_sheets_quads_does_not_poke_through)
+{
+	plait_collider_def box = plait_default_collider_def();
+	box.shape = PLAIT_SHAPE_BOX;
+	box.center = (plait_vec3){0.0f, 0.15f, 0.0f};
+	box.size = (plait_vec3){0.3f, 0.3f, 0.3f};
+	drop_coarse_sheet_on(&box, 0.3f);
+}
+
+Test(collide, a_mesh_spike_between_the_sheets_vertices_does_not_poke_through)
+{
+	/* A square pyramid 0.4 m tall on a 0.1 m base, as a triangle mesh. */
+	plait_vec3 corners[5] = {{-0.05f, 0.0f, -0.05f}, {0.05f, 0.0f, -0.05f}, {0.05f, 0.0f, 0.05f},
+	                         {-0.05f, 0.0f, 0.05f},  {0.0f, 0.4f, 0.0f}};
+	int sizes[5] = {3, 3, 3, 3, 4};
+	int indices[16] = {0, 4, 1, 1, 4, 2, 2, 4, 3, 3, 4, 0, 0, 1, 2, 3};
+	plait_collider_def spike = plait_default_collider_def();
+	spike.shape = PLAIT_SHAPE_MESH;
+	spike.mesh = (plait_mesh_def){corners, 5, sizes, 5, indices};
+	drop_coarse_sheet_on(&spike, 0.4f);
+}
+
+/* A box's corners are particles of the solver's own: they are not the box's vertices in the
+ * API, and destroying another collider renumbers them with everything after it. */
+Test(collide, box_colliders_keep_their_corners_when_another_collider_goes)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_error error;
+	plait_collider_def ground = plait_default_collider_def();
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, &error)), "%s", error.message);
+	plait_collider_def box = plait_default_collider_def();
+	box.shape = PLAIT_SHAPE_BOX;
+	box.size = (plait_vec3){0.3f, 0.3f, 0.3f};
+	box.center = (plait_vec3){5.0f, 0.15f, 0.0f};
+	plait_object_id far_box = plait_create_collider(world, &box, &error);
+	box.center = (plait_vec3){0.0f, 0.15f, 0.0f};
+	plait_object_id near_box = plait_create_collider(world, &box, &error);
+	cr_assert(!plait_object_id_is_null(far_box) && !plait_object_id_is_null(near_box));
+	cr_assert_eq(plait_object_get_vertex_count(near_box), 0);
+	plait_vec3 unused;
+	cr_assert_neq(plait_object_get_positions(near_box, 0, 1, &unused, &error), PLAIT_OK);
+	test_grid grid = test_grid_make(4, 4, 2.0f, 2.0f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].x += 0.25f;
+		grid.positions[i].z += 0.25f;
+		grid.positions[i].y = 0.6f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.01f;
+	plait_object_id cloth = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	cr_assert(test_step_frames(world, 5));
+	plait_destroy_object(far_box);
+	for (int frame = 1; frame <= 60; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_intersection_report report;
+		cr_assert_eq(plait_world_check_intersections(world, &report, &error), PLAIT_OK);
+		cr_assert_eq(report.triangle_pairs, 0, "frame %d: %d crossing pairs", frame, report.triangle_pairs);
+	}
+	/* The box rises; its corners (the solver's particles) must rise with it. */
+	plait_transform lift = plait_identity_transform();
+	lift.translate.y = 0.05f;
+	cr_assert_eq(plait_collider_set_transform(near_box, lift, &error), PLAIT_OK);
+	cr_assert(test_step_frames(world, 1));
+	const plait_sim *sim = &world.world->sim;
+	const plait_collider *collider = &sim->colliders[sim->collider_count - 1];
+	cr_assert_eq(collider->count, 8);
+	plait_vec3 corners[8];
+	cr_assert_eq(plait_collider_get_surface_positions(near_box, 0, 8, corners, &error), PLAIT_OK);
+	for (int k = 0; k < 8; ++k) {
+		vec3 particle = sim->particles.point[collider->first + k].x;
+		cr_assert_float_eq(particle.y, corners[k].y, 1e-6f, "corner %d at %g, the box's at %g", k,
+		                   (double)particle.y, (double)corners[k].y);
+	}
+	cr_assert_eq(plait_object_get_vertex_count(cloth), 25);
+	plait_vec3 x[25];
+	plait_object_get_positions(cloth, 0, 25, x, NULL);
+	float highest = -INFINITY;
+	for (int i = 0; i < 25; ++i) {
+		highest = fmaxf(highest, x[i].y);
+	}
+	cr_assert_gt(highest, 0.15f, "the sheet fell past the box (highest vertex at %g m)", (double)highest);
+	test_grid_free(&grid);
+	plait_destroy_world(world);
 }
 
 Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)

@@ -419,8 +419,9 @@ plait_frame_stats plait_world_get_stats(plait_world_id world);
 
 /* An intersection check of the current state (for tests and users, not used by the solver). */
 typedef struct plait_intersection_report {
-	int triangle_pairs;   /* pairs of cloth triangles that intersect: between cloths, and within
-	                       * one cloth for triangles that share no vertex */
+	int triangle_pairs;   /* pairs of triangles that intersect: between cloths, within one cloth
+	                       * for triangles that share no vertex, and between a cloth and a mesh
+	                       * or box collider */
 	int inside_colliders; /* vertices inside a collider (below a plane, inside a shape) by more
 	                       * than 1e-4 scene units plus 1% of their radius */
 } plait_intersection_report;

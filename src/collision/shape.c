@@ -1,5 +1,15 @@
 #include "collision/shape.h"
 
+const int plait_box_faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                   {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+
+vec3 plait_shape_box_corner(const plait_shape *box, int i)
+{
+	vec3 h = box->half_extents;
+	vec3 local = {(i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z};
+	return v3_add(box->center, m3_mul_v3(&box->rotation, local));
+}
+
 plait_rigid plait_rigid_from_transform(plait_transform transform)
 {
 	plait_rigid r;

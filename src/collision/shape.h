@@ -27,6 +27,11 @@ typedef struct plait_rigid {
 } plait_rigid;
 
 plait_rigid plait_rigid_from_transform(plait_transform transform);
+
+/* A box's corner i in shape space: bit 0 picks +x, bit 1 +y, bit 2 +z (box space). Its faces as
+ * corner quads, wound counter-clockwise seen from outside. */
+vec3 plait_shape_box_corner(const plait_shape *box, int i);
+extern const int plait_box_faces[6][4];
 static inline vec3 plait_rigid_apply(const plait_rigid *r, vec3 p)
 {
 	return v3_add(r->translate, v3_scale(m3_mul_v3(&r->rotation, p), r->scale));

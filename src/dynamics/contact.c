@@ -27,6 +27,16 @@ void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
 		if (c->mesh_end != NULL) {
 			plait_mesh_shape_deform(c->shape.mesh, c->mesh_start, c->mesh_end, t0, t1);
 		}
+		/* Its vertices (particles) go where it is at the substep's end; they start from
+		 * where the last substep left them. */
+		plait_particles *p = &sim->particles;
+		for (int v = 0; v < c->count; ++v) {
+			vec3 local = c->shape.type == PLAIT_SHAPE_BOX ? plait_shape_box_corner(&c->shape, v)
+			                                              : c->shape.mesh->positions[v];
+			vec3 x = plait_rigid_apply(&c->rigid_end, local);
+			p->pin_start[c->first + v] = x;
+			p->pin_end[c->first + v] = x;
+		}
 	}
 }
 
@@ -1002,8 +1012,9 @@ int plait_count_penetrations(const plait_sim *sim)
 		vec3 lower, upper;
 		bool bounded = plait_shape_bounds(&c->shape, &lower, &upper);
 		for (int i = 0; i < p->count; ++i) {
-			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE)) {
-				continue;
+			if (!(p->flags[i] & PLAIT_PARTICLE_COLLIDE) ||
+			    sim->materials[p->material[i]].type == PLAIT_OBJECT_COLLIDER) {
+				continue; /* colliders' own vertices */
 			}
 			vec3 q = plait_rigid_apply_inverse(&r, p->point[i].x);
 			if (bounded && (q.x < lower.x || q.y < lower.y || q.z < lower.z || q.x > upper.x ||

@@ -985,6 +985,10 @@ static void traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
 			if (points_a && points_b) {
 				continue; /* particle pairs (contact.c) */
 			}
+			if (sim->materials[oa->material].type == PLAIT_OBJECT_COLLIDER &&
+			    sim->materials[ob->material].type == PLAIT_OBJECT_COLLIDER) {
+				continue; /* colliders' surfaces (plait_collider.first) never push each other */
+			}
 			object_pass between = {pass, oa->first, ob->first};
 			/* At the listing, two objects' boxes also reach across their allowance. */
 			float margin = pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : 0.0f;

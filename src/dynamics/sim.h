@@ -185,6 +185,12 @@ typedef struct plait_collider {
 	vec3 *mesh_start, *mesh_end;
 	float thickness, friction, stickiness, bounce;
 	bool collide;
+	/* A mesh or box collider's vertices as pinned particles [first, first + count) (count 0 for
+	 * the other shapes), with a surface of its triangles: in mesh contacts cloth meets the
+	 * collider's corners and edges as well as its faces, and an edge or corner sharper than the
+	 * cloth's triangles cannot pass between their vertices. They follow the collider substep by
+	 * substep (plait_colliders_begin_substep). */
+	int first, count;
 } plait_collider;
 
 /* A cloth's surface as other objects' vertices see it: its triangles (object-local indices)

@@ -221,7 +221,9 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 	for (int s = 0; s < substeps; ++s) {
 		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;
 		sim->substep = s;
-		plait_colliders_begin_substep(sim, t0, t1);
+		if (!begun) {
+			plait_colliders_begin_substep(sim, t0, t1);
+		}
 		if (air) {
 			plait_air_accumulate(sim, sim->time + (double)(t0 * frame_time));
 		}
@@ -259,6 +261,8 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		/* The velocity update; with the next substep's start when nothing comes between. */
 		begun = s + 1 < substeps && !air && sim->pair_contact_count == 0;
 		if (begun) {
+			/* Colliders first: their vertices' targets for the next substep. */
+			plait_colliders_begin_substep(sim, t1, (float)(s + 2) / (float)substeps);
 			particle_job both = job;
 			both.t_end = (float)(s + 2) / (float)substeps;
 			plait_parallel_for(&sim->parallel, end_and_begin_range, &both, 0, sim->particles.count,

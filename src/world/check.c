@@ -10,9 +10,16 @@
 
 typedef struct check_pass {
 	const plait_mesh_shape *shape;
+	const plait_sim *sim;
 	int triangle;
 	int count;
 } check_pass;
+
+/* Whether a triangle of the soup is a collider's (its vertices are the collider's particles). */
+static bool collider_triangle(const plait_sim *sim, const int *triangle)
+{
+	return sim->materials[sim->particles.material[triangle[0]]].type == PLAIT_OBJECT_COLLIDER;
+}
 
 static bool share_a_vertex(const int *a, const int *b)
 {
@@ -36,6 +43,9 @@ static void visit_pair(int other, void *context)
 	if (share_a_vertex(a, b)) {
 		return; /* neighbours touch by construction */
 	}
+	if (collider_triangle(pass->sim, a) && collider_triangle(pass->sim, b)) {
+		return; /* colliders may overlap each other */
+	}
 	const vec3 *x = pass->shape->positions;
 	vec3 t[3] = {x[a[0]], x[a[1]], x[a[2]]}, u[3] = {x[b[0]], x[b[1]], x[b[2]]};
 	pass->count += plait_triangles_intersect(t, u);
@@ -50,17 +60,27 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 	}
 	memset(report, 0, sizeof *report);
 	report->inside_colliders = plait_count_penetrations(&world->sim);
-	/* One soup of every colliding cloth's polygons, indexed by particle. */
-	int faces = 0, indices = 0;
+	/* One soup of every colliding cloth's polygons and every mesh and box collider's triangles,
+	 * indexed by particle. */
+	const plait_sim *sim = &world->sim;
+	int faces = 0, indices = 0, cloth_faces = 0;
 	for (int o = 0; o < world->object_count; ++o) {
 		const plait_object *object = &world->objects[o];
-		if (object->alive && object->type == PLAIT_OBJECT_CLOTH &&
-		    world->sim.materials[object->material].collide) {
+		if (object->alive && object->type == PLAIT_OBJECT_CLOTH && sim->materials[object->material].collide) {
 			faces += object->topology.polygon_count;
 			indices += object->topology.polygon_index_count;
 		}
 	}
-	if (faces == 0) {
+	cloth_faces = faces;
+	for (int k = 0; k < sim->surface_count; ++k) {
+		const plait_surface *surface = &sim->surfaces[k];
+		if (sim->materials[surface->material].type == PLAIT_OBJECT_COLLIDER &&
+		    sim->materials[surface->material].collide) {
+			faces += surface->shape->triangle_count;
+			indices += 3 * surface->shape->triangle_count;
+		}
+	}
+	if (cloth_faces == 0) {
 		return PLAIT_OK;
 	}
 	const plait_allocator *a = &world->allocator;
@@ -89,6 +109,19 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 			soup[k++] = object->first_particle + t->polygon_indices[i];
 		}
 	}
+	for (int m = 0; m < sim->surface_count; ++m) {
+		const plait_surface *surface = &sim->surfaces[m];
+		if (sim->materials[surface->material].type != PLAIT_OBJECT_COLLIDER ||
+		    !sim->materials[surface->material].collide) {
+			continue;
+		}
+		for (int t = 0; t < surface->shape->triangle_count; ++t) {
+			sizes[f++] = 3;
+			for (int c = 0; c < 3; ++c) {
+				soup[k++] = surface->first + surface->shape->triangles[t][c];
+			}
+		}
+	}
 	for (int i = 0; i < particle_count; ++i) {
 		positions[i] = world->sim.particles.point[i].x;
 	}
@@ -101,7 +134,7 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 	if (result != PLAIT_OK) {
 		return result;
 	}
-	check_pass pass = {&shape, 0, 0};
+	check_pass pass = {&shape, sim, 0, 0};
 	for (int t = 0; t < shape.triangle_count; ++t) {
 		const int *tri = shape.triangles[t];
 		vec3 lower =

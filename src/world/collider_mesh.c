@@ -207,18 +207,6 @@ static void lathe_triangle(int rings, int t, int out[3])
 	out[2] = d;
 }
 
-/* Box corner i: bit 0 picks +x, bit 1 +y, bit 2 +z (box space). Faces as corner quads, wound
- * counter-clockwise seen from outside. */
-static const int box_faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                                    {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
-static vec3 box_corner(const plait_shape *shape, int i)
-{
-	vec3 h = shape->half_extents;
-	vec3 local = {(i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z};
-	return v3_add(shape->center, m3_mul_v3(&shape->rotation, local));
-}
-
 static int surface_vertex_count(const plait_shape *shape)
 {
 	switch (shape->type) {
@@ -282,7 +270,7 @@ int plait_collider_get_surface_triangles(plait_object_id id, int *indices, int c
 			lathe_triangle(shape->type == PLAIT_SHAPE_SPHERE ? SPHERE_RINGS : 2 * CAPSULE_CAP_RINGS, t, out);
 			break;
 		case PLAIT_SHAPE_BOX: {
-			const int *quad = box_faces[t / 2];
+			const int *quad = plait_box_faces[t / 2];
 			out[0] = quad[0];
 			out[1] = quad[t % 2 == 0 ? 1 : 2];
 			out[2] = quad[t % 2 == 0 ? 2 : 3];
@@ -312,7 +300,7 @@ static vec3 surface_vertex(const plait_shape *shape, const lathe *l, int i)
 	case PLAIT_SHAPE_CAPSULE:
 		return lathe_vertex(shape, l, i);
 	case PLAIT_SHAPE_BOX:
-		return box_corner(shape, i);
+		return plait_shape_box_corner(shape, i);
 	case PLAIT_SHAPE_MESH:
 		return shape->mesh->positions[i];
 	}

@@ -285,7 +285,8 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	          (!bend_distance || (bend_pairs != NULL && bend_pair_count >= 0)) &&
 	          plait_sim_reserve_distance(sim, &sim->bend_distance, bend_pair_count) &&
 	          plait_sim_reserve_aero(sim, topology->triangle_count) &&
-	          (def->tethers == PLAIT_TETHER_NONE || plait_sim_reserve_tethers(sim, vertex_count * plait_tethers_per_vertex(def->pin_count)));
+	          (def->tethers == PLAIT_TETHER_NONE ||
+	           plait_sim_reserve_tethers(sim, vertex_count * plait_tethers_per_vertex(def->pin_count)));
 	if (!ok) {
 		plait_free(a, polygon_area);
 		plait_free(a, triangle_area);
@@ -740,6 +741,59 @@ static plait_result check_transform(plait_error *error, const char *label, plait
 	return PLAIT_OK;
 }
 
+/* A mesh or box collider's vertices as pinned particles with a surface of its triangles (see
+ * plait_collider.first). Without memory for them the collider still works; cloth then meets
+ * it through the cloth's vertices only. */
+static void add_collider_surface(plait_world *world, plait_object *object, plait_collider *collider)
+{
+	plait_sim *sim = &world->sim;
+	const plait_shape *shape = &collider->shape;
+	const plait_allocator *a = &world->allocator;
+	bool box = shape->type == PLAIT_SHAPE_BOX;
+	int vertices = box ? 8 : shape->mesh->vertex_count;
+	int faces = box ? 6 : shape->mesh->triangle_count, corners = box ? 4 : 3;
+	vec3 *positions = plait_alloc(a, sizeof(vec3) * (size_t)vertices);
+	int *sizes = plait_alloc(a, sizeof(int) * (size_t)faces);
+	int *indices = plait_alloc(a, sizeof(int) * (size_t)(faces * corners));
+	plait_mesh_shape *surface = plait_alloc_zero(a, 1, sizeof *surface);
+	bool ok = positions != NULL && sizes != NULL && indices != NULL && surface != NULL &&
+	          plait_sim_reserve_particles(sim, vertices) && plait_sim_reserve_surfaces(sim, 1);
+	if (ok) {
+		plait_rigid r = plait_rigid_from_transform(collider->transform_end);
+		for (int v = 0; v < vertices; ++v) {
+			positions[v] =
+			    plait_rigid_apply(&r, box ? plait_shape_box_corner(shape, v) : shape->mesh->positions[v]);
+		}
+		for (int f = 0; f < faces; ++f) {
+			sizes[f] = corners;
+			for (int k = 0; k < corners; ++k) {
+				indices[f * corners + k] = box ? plait_box_faces[f][k] : shape->mesh->triangles[f][k];
+			}
+		}
+		plait_mesh_def mesh = {positions, vertices, sizes, faces, indices};
+		ok = plait_mesh_shape_build(surface, a, &mesh, NULL) == PLAIT_OK;
+	}
+	if (ok) {
+		int first = sim->particles.count;
+		for (int v = 0; v < vertices; ++v) {
+			/* Massless and pinned: moved only by the collider, never by a contact. */
+			(void)plait_sim_add_particle(sim, positions[v], v3(0.0f, 0.0f, 0.0f), 0.0f, collider->thickness,
+			                             object->material, PLAIT_PARTICLE_PINNED | PLAIT_PARTICLE_COLLIDE);
+		}
+		sim->surfaces[sim->surface_count++] =
+		    (plait_surface){collider->object, object->material, first, surface};
+		object->first_particle = first;
+		object->particle_count = vertices;
+		collider->first = first;
+		collider->count = vertices;
+	} else {
+		plait_free(a, surface);
+	}
+	plait_free(a, positions);
+	plait_free(a, sizes);
+	plait_free(a, indices);
+}
+
 plait_object_id plait_create_collider(plait_world_id world_id, const plait_collider_def *def,
                                       plait_error *error)
 {
@@ -821,6 +875,9 @@ plait_object_id plait_create_collider(plait_world_id world_id, const plait_colli
 	collider->bounce = def->surface.bounce;
 	collider->collide = def->surface.collide;
 	object->collider = k;
+	if (collider->collide && (shape.type == PLAIT_SHAPE_MESH || shape.type == PLAIT_SHAPE_BOX)) {
+		add_collider_surface(world, object, collider);
+	}
 	plait_world_update_kinds(world);
 	return id;
 }

@@ -71,6 +71,12 @@ void plait_destroy_object(plait_object_id id)
 		surface->first = world->objects[surface->object].first_particle;
 		++k;
 	}
+	/* The colliders' vertices (their particles) follow too. */
+	for (int k = 0; k < sim->collider_count; ++k) {
+		if (sim->colliders[k].count > 0) {
+			sim->colliders[k].first = world->objects[sim->colliders[k].object].first_particle;
+		}
+	}
 	if (object->collider >= 0) {
 		int k = object->collider;
 		plait_collider_release(world, &sim->colliders[k]);
@@ -144,10 +150,17 @@ plait_object_id plait_world_get_object(plait_world_id world_id, int index)
 	return id;
 }
 
+/* The vertices an object shows through the API: a collider's particles are the solver's own
+ * (plait_collider.first), its geometry is read with plait_collider_get_surface_positions. */
+static int shown_vertices(const plait_object *object)
+{
+	return object->type == PLAIT_OBJECT_COLLIDER ? 0 : object->particle_count;
+}
+
 int plait_object_get_vertex_count(plait_object_id id)
 {
 	plait_object *object = plait_world_resolve(id, NULL);
-	return object != NULL ? object->particle_count : 0;
+	return object != NULL ? shown_vertices(object) : 0;
 }
 
 int plait_object_get_triangles(plait_object_id id, int *indices, int capacity)
@@ -192,12 +205,13 @@ static plait_object *resolve_range(plait_object_id id, int first, int count, con
 	if (object == NULL) {
 		return NULL;
 	}
-	if (first < 0 || count < 0 || first > object->particle_count || count > object->particle_count - first ||
+	int vertices = shown_vertices(object);
+	if (first < 0 || count < 0 || first > vertices || count > vertices - first ||
 	    (count > 0 && buffer == NULL)) {
 		plait_error_set(
 		    error, PLAIT_ERROR_INVALID_ARGUMENT,
 		    "'%s': %d vertices from vertex %d are outside its %d vertices (or the buffer is NULL)",
-		    object->name, count, first, object->particle_count);
+		    object->name, count, first, vertices);
 		return NULL;
 	}
 	return object;
@@ -288,9 +302,9 @@ static plait_object *resolve_vertex(plait_object_id id, int vertex, plait_vec3 t
 	if (object == NULL) {
 		return NULL;
 	}
-	if (vertex < 0 || vertex >= object->particle_count) {
+	if (vertex < 0 || vertex >= shown_vertices(object)) {
 		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "'%s': vertex %d is outside 0..%d", object->name,
-		                vertex, object->particle_count - 1);
+		                vertex, shown_vertices(object) - 1);
 		return NULL;
 	}
 	if (!v3_is_finite(target)) {
