@@ -8,6 +8,8 @@
  *
  *   scene=pile n=64 threads=1 ms=12.3 collision=0.41 worst_crossings=0 crossing_frames=0 ...
  *
+ * (worst_in_round: the most cloth triangles reaching into a sphere or capsule collider.)
+ *
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
@@ -38,7 +40,7 @@ static int compare_doubles(const void *a, const void *b)
 
 typedef struct run_result {
 	double ms, collision_ms;
-	int worst_crossings, crossing_frames, worst_inside, ccd_hits, failsafe, order_violations;
+	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe, order_violations;
 	int frames;
 	bool failed;
 } run_result;
@@ -80,15 +82,19 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 			plait_intersection_report report;
 			plait_world_check_intersections(scene.world, &report, NULL);
 			r.crossing_frames += report.triangle_pairs > 0;
-			if (verbose && (report.triangle_pairs > 0 || report.inside_colliders > 0)) {
-				printf("  frame %d: crossings %d inside %d\n", f + 1, report.triangle_pairs,
-				       report.inside_colliders);
+			if (verbose && (report.triangle_pairs > 0 || report.inside_colliders > 0 ||
+			                report.triangles_in_colliders > 0)) {
+				printf("  frame %d: crossings %d inside %d triangles in round colliders %d\n", f + 1,
+				       report.triangle_pairs, report.inside_colliders, report.triangles_in_colliders);
 			}
 			if (report.triangle_pairs > r.worst_crossings) {
 				r.worst_crossings = report.triangle_pairs;
 			}
 			if (report.inside_colliders > r.worst_inside) {
 				r.worst_inside = report.inside_colliders;
+			}
+			if (report.triangles_in_colliders > r.worst_in_round) {
+				r.worst_in_round = report.triangles_in_colliders;
 			}
 		}
 	}
@@ -149,10 +155,10 @@ int main(int argc, char **argv)
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
 		printf(
 		    "scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d crossing_frames=%d "
-		    "worst_inside=%d order_violations=%d ccd_hits=%d failsafe=%d%s\n",
+		    "worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d failsafe=%d%s\n",
 		    collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
-		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.order_violations,
-		    last.ccd_hits, last.failsafe, last.failed ? " FAILED" : "");
+		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.worst_in_round,
+		    last.order_violations, last.ccd_hits, last.failsafe, last.failed ? " FAILED" : "");
 		fflush(stdout);
 		failures += last.failed;
 		free(ms);

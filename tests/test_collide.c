@@ -12,7 +12,7 @@
 #include "world/world.h"
 
 typedef struct scene_totals {
-	int worst_crossings, crossing_frames, worst_inside, ccd_hits, failsafe;
+	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe;
 } scene_totals;
 
 /* Runs a scene for `frames` (0: its own length), checking every frame. */
@@ -33,10 +33,17 @@ static scene_totals run_scene(collide_scene_kind kind, int n, int frames, collid
 		totals.ccd_hits += stats.ccd_hits;
 		totals.failsafe += stats.failsafe;
 		cr_assert_eq(stats.nonfinite, 0);
-		if (report.triangle_pairs > 0 || report.inside_colliders > 0) {
-			fprintf(stderr, "%s n=%d frame %d: %d crossing triangle pairs, %d vertices inside colliders\n",
-			        collide_scene_names[kind], n, f, report.triangle_pairs, report.inside_colliders);
+		if (report.triangle_pairs > 0 || report.inside_colliders > 0 || report.triangles_in_colliders > 0) {
+			fprintf(
+			    stderr,
+			    "%s n=%d frame %d: %d crossing triangle pairs, %d vertices inside colliders, %d triangles "
+			    "in round colliders\n",
+			    collide_scene_names[kind], n, f, report.triangle_pairs, report.inside_colliders,
+			    report.triangles_in_colliders);
 		}
+		totals.worst_in_round = report.triangles_in_colliders > totals.worst_in_round
+		                            ? report.triangles_in_colliders
+		                            : totals.worst_in_round;
 		totals.crossing_frames += report.triangle_pairs > 0;
 		totals.worst_crossings =
 		    report.triangle_pairs > totals.worst_crossings ? report.triangle_pairs : totals.worst_crossings;
@@ -57,6 +64,8 @@ static void expect_clean(const scene_totals *t, const char *name)
 	             t->worst_crossings, t->crossing_frames);
 	cr_expect_eq(t->worst_inside, 0, "%s: up to %d vertices inside colliders in a frame", name,
 	             t->worst_inside);
+	cr_expect_eq(t->worst_in_round, 0, "%s: up to %d triangles in round colliders in a frame", name,
+	             t->worst_in_round);
 }
 
 Test(collide, two_sheets_dropped_on_a_sphere_never_cross_and_keep_their_order)
@@ -226,8 +235,11 @@ Test(collide, a_box_narrower_than_the_sheets_quads_does_not_poke_through)
 Test(collide, a_mesh_spike_between_the_sheets_vertices_does_not_poke_through)
 {
 	/* A square pyramid 0.4 m tall on a 0.1 m base, as a triangle mesh. */
-	plait_vec3 corners[5] = {{-0.05f, 0.0f, -0.05f}, {0.05f, 0.0f, -0.05f}, {0.05f, 0.0f, 0.05f},
-	                         {-0.05f, 0.0f, 0.05f},  {0.0f, 0.4f, 0.0f}};
+	plait_vec3 corners[5] = {{-0.05f, 0.0f, -0.05f},
+	                         {0.05f, 0.0f, -0.05f},
+	                         {0.05f, 0.0f, 0.05f},
+	                         {-0.05f, 0.0f, 0.05f},
+	                         {0.0f, 0.4f, 0.0f}};
 	int sizes[5] = {3, 3, 3, 3, 4};
 	int indices[16] = {0, 4, 1, 1, 4, 2, 2, 4, 3, 3, 4, 0, 0, 1, 2, 3};
 	plait_collider_def spike = plait_default_collider_def();
@@ -301,6 +313,55 @@ Test(collide, box_colliders_keep_their_corners_when_another_collider_goes)
 	cr_assert_gt(highest, 0.15f, "the sheet fell past the box (highest vertex at %g m)", (double)highest);
 	test_grid_free(&grid);
 	plait_destroy_world(world);
+}
+
+/* A sheet of large triangles (0.25 m) laid over a small sphere (0.15 m): with its vertices held
+ * out of the sphere, its triangles can still reach into it between them by up to about
+ * (0.35 m)^2 / (6 x 0.15 m) = 14 cm. Meeting the sphere with its full surface, none does;
+ * with its vertices only (PLAIT_COLLIDE_VERTEX), some do. Returns the most such triangles in a
+ * frame. */
+static int coarse_sheet_over_a_small_sphere(plait_collision_flag flag)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_error error;
+	plait_collider_def ball = plait_default_collider_def();
+	ball.shape = PLAIT_SHAPE_SPHERE;
+	ball.center = (plait_vec3){0.05f, 0.0f, 0.08f};
+	ball.radius = 0.15f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ball, &error)), "%s", error.message);
+	test_grid grid = test_grid_make(8, 8, 2.0f, 2.0f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].y = 0.3f;
+	}
+	int pins[4] = {0, 8, 72, 80}; /* the corners: the sheet is held up over the ball */
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.005f;
+	def.collision_flag = flag;
+	def.pins = pins;
+	def.pin_count = 4;
+	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, &error)), "%s", error.message);
+	int worst = 0;
+	for (int frame = 1; frame <= 60; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_intersection_report report;
+		cr_assert_eq(plait_world_check_intersections(world, &report, &error), PLAIT_OK);
+		cr_assert_eq(report.inside_colliders, 0, "frame %d", frame);
+		worst = report.triangles_in_colliders > worst ? report.triangles_in_colliders : worst;
+	}
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+	return worst;
+}
+
+Test(collide, a_round_collider_does_not_reach_between_a_sheets_vertices)
+{
+	int full = coarse_sheet_over_a_small_sphere(PLAIT_COLLIDE_FULL_SURFACE);
+	int vertices = coarse_sheet_over_a_small_sphere(PLAIT_COLLIDE_VERTEX);
+	cr_assert_eq(full, 0, "up to %d triangles reach into the sphere", full);
+	cr_assert_gt(vertices, 0, "the sphere should reach between the vertices of a vertex-only sheet");
 }
 
 Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)

@@ -231,6 +231,17 @@ typedef enum plait_self_collision_flag {
 	PLAIT_SELF_COLLIDE_VERTEX,           /* vertex-vertex only, spheres of the thickness */
 } plait_self_collision_flag;
 
+/* Which of a cloth's primitives meet colliders (seed 000 §4.2: nCloth's collision flag). */
+typedef enum plait_collision_flag {
+	/* Its vertices against colliders' faces, and its edges and triangles against colliders'
+	 * edges, corners and round surfaces: no part of a collider passes between its vertices. */
+	PLAIT_COLLIDE_FULL_SURFACE = 0,
+	/* Its vertices only (as particle-based cloth solvers do, NvCloth's and Jolt's): cheaper, but
+	 * a collider's corner, edge or curved surface can reach between the vertices of triangles
+	 * large against it (a sphere of radius R by up to about (longest edge)^2 / 6R). */
+	PLAIT_COLLIDE_VERTEX,
+} plait_collision_flag;
+
 typedef struct plait_cloth_def {
 	const char *name;
 	plait_mesh_def mesh;
@@ -258,6 +269,7 @@ typedef struct plait_cloth_def {
 	bool self_collide;            /* it collides with itself (false); pairs of its primitives closer than the
 	                               * self-collision thickness in the start shape are left to its constraints */
 	plait_self_collision_flag self_collision_flag; /* (PLAIT_SELF_COLLIDE_FULL_SURFACE) */
+	plait_collision_flag collision_flag;           /* against colliders (PLAIT_COLLIDE_FULL_SURFACE) */
 	float self_collide_width_scale;                /* self-collision thickness / thickness, 0.01..100 (1) */
 	float tether_scale;                            /* allowed distance / rest distance, 1..10 (1) */
 	float tether_stiffness;                        /* share of a tether's excess removed per pass, 0..1 (1) */
@@ -419,11 +431,14 @@ plait_frame_stats plait_world_get_stats(plait_world_id world);
 
 /* An intersection check of the current state (for tests and users, not used by the solver). */
 typedef struct plait_intersection_report {
-	int triangle_pairs;   /* pairs of triangles that intersect: between cloths, within one cloth
-	                       * for triangles that share no vertex, and between a cloth and a mesh
-	                       * or box collider */
-	int inside_colliders; /* vertices inside a collider (below a plane, inside a shape) by more
-	                       * than 1e-4 scene units plus 1% of their radius */
+	int triangle_pairs;         /* pairs of triangles that intersect: between cloths, within one cloth
+	                             * for triangles that share no vertex, and between a cloth and a mesh
+	                             * or box collider */
+	int inside_colliders;       /* vertices inside a collider (below a plane, inside a shape) by more
+	                             * than 1e-4 scene units plus 1% of their radius */
+	int triangles_in_colliders; /* cloth triangles reaching into a sphere or capsule collider by
+	                             * more than that (the other shapes' triangles are in
+	                             * triangle_pairs) */
 } plait_intersection_report;
 
 plait_result plait_world_check_intersections(plait_world_id world, plait_intersection_report *report,

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "collision/ccd.h"
+#include "collision/closest.h"
 #include "collision/mesh_shape.h"
 #include "collision/moving_triangle.h"
 #include "collision/particle_hash.h"
@@ -676,6 +677,95 @@ static void collide_collider_range(void *context, int begin, int end)
 	atomic_fetch_add_explicit(&job->contacts, contacts, memory_order_relaxed);
 }
 
+/* A cloth triangle whose vertices are all outside a sphere or capsule can still reach into it
+ * between them, by up to about (longest edge)^2 / (8 radius): a round shape has no corners or
+ * edges of its own to meet the cloth with (mesh and box colliders do: plait_collider.first).
+ * Such triangles are pushed out along the normal from the shape's core (centre, axis) to their
+ * nearest point, their vertices moved by their barycentric weights and inverse masses. Only
+ * triangles whose edges are long enough for the dip to exceed their thickness are tested; one
+ * after another, as they share vertices. Returns the triangles pushed. */
+static int push_triangles_out_of_round(const collider_job *job)
+{
+	plait_sim *sim = job->sim;
+	const plait_collider *c = job->c;
+	plait_particles *p = &sim->particles;
+	const plait_rigid *r = &c->rigid_end;
+	float core_radius = c->shape.radius;
+	int pushed = 0;
+	for (int k = 0; k < sim->surface_count; ++k) {
+		const plait_surface *surface = &sim->surfaces[k];
+		const plait_material *mat = &sim->materials[surface->material];
+		if (mat->type != PLAIT_OBJECT_CLOTH || !mat->collide || mat->collider_flag == PLAIT_COLLIDE_VERTEX) {
+			continue;
+		}
+		const plait_mesh_shape *shape = surface->shape;
+		for (int t = 0; t < shape->triangle_count; ++t) {
+			int v[3];
+			vec3 x[3];
+			for (int m = 0; m < 3; ++m) {
+				v[m] = surface->first + shape->triangles[t][m];
+				x[m] = p->point[v[m]].x;
+			}
+			/* Near the collider at all (its ball over the substep)? */
+			vec3 lower = v3_min(x[0], v3_min(x[1], x[2])), upper = v3_max(x[0], v3_max(x[1], x[2]));
+			vec3 nearest = v3_min(v3_max(job->ball_centre, lower), upper);
+			if (v3_length_sq(v3_sub(nearest, job->ball_centre)) > job->ball_radius * job->ball_radius) {
+				continue;
+			}
+			float reach = (p->radius[v[0]] + p->radius[v[1]] + p->radius[v[2]]) / 3.0f + c->thickness;
+			float longest_sq =
+			    plait_maxf(v3_length_sq(v3_sub(x[1], x[0])),
+			               plait_maxf(v3_length_sq(v3_sub(x[2], x[1])), v3_length_sq(v3_sub(x[0], x[2]))));
+			/* The deepest a triangle with its vertices outside can reach, against the tolerance
+			 * plait_count_penetrations allows. */
+			if (longest_sq / (8.0f * core_radius * r->scale) <= reach + 5e-5f) {
+				continue;
+			}
+			vec3 local[3];
+			for (int m = 0; m < 3; ++m) {
+				local[m] = job->identity ? x[m] : plait_rigid_apply_inverse(r, x[m]);
+			}
+			/* The triangle's point nearest the core, and the core's point nearest it. */
+			int region;
+			float w[3];
+			vec3 core = c->shape.center, q;
+			if (c->shape.type == PLAIT_SHAPE_SPHERE) {
+				q = plait_closest_point_on_triangle(core, local[0], local[1], local[2], &region, w);
+			} else {
+				/* Alternate between the axis and the triangle: converges for a convex pair. */
+				core = c->shape.a;
+				for (int iteration = 0; iteration < 8; ++iteration) {
+					q = plait_closest_point_on_triangle(core, local[0], local[1], local[2], &region, w);
+					float s = plait_closest_on_segment(q, c->shape.a, c->shape.b);
+					core = v3_lerp(c->shape.a, c->shape.b, s);
+				}
+				q = plait_closest_point_on_triangle(core, local[0], local[1], local[2], &region, w);
+			}
+			vec3 d = v3_sub(q, core);
+			float distance = v3_length(d);
+			float depth = core_radius + reach / r->scale - distance;
+			if (depth <= 0.0f || distance <= 1e-12f || w[0] > 0.9999f || w[1] > 0.9999f || w[2] > 0.9999f) {
+				continue; /* clear, or at a vertex: the vertex's own contact */
+			}
+			vec3 normal = job->identity ? v3_scale(d, 1.0f / distance)
+			                            : plait_rigid_rotate(r, v3_scale(d, 1.0f / distance));
+			float weighted = 0.0f;
+			for (int m = 0; m < 3; ++m) {
+				weighted += w[m] * w[m] * p->point[v[m]].w;
+			}
+			if (weighted <= 0.0f) {
+				continue;
+			}
+			float lambda = depth * r->scale / weighted;
+			for (int m = 0; m < 3; ++m) {
+				p->point[v[m]].x = v3_mul_add(p->point[v[m]].x, lambda * w[m] * p->point[v[m]].w, normal);
+			}
+			++pushed;
+		}
+	}
+	return pushed;
+}
+
 #define COLLIDER_GRAIN 1024
 
 /* Particles indices[0, count) (all particles when indices is NULL) against collider c. */
@@ -732,7 +822,11 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c, const 
 	                    identity, indices, 0};
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
-	return atomic_load_explicit(&job.contacts, memory_order_relaxed);
+	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
+	if (c->shape.type == PLAIT_SHAPE_SPHERE || c->shape.type == PLAIT_SHAPE_CAPSULE) {
+		contacts += push_triangles_out_of_round(&job);
+	}
+	return contacts;
 }
 
 /* Earliest t in [0, 1] at which |d0 + t (d1 - d0)| <= distance; false if never. */

@@ -985,9 +985,14 @@ static void traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
 			if (points_a && points_b) {
 				continue; /* particle pairs (contact.c) */
 			}
-			if (sim->materials[oa->material].type == PLAIT_OBJECT_COLLIDER &&
-			    sim->materials[ob->material].type == PLAIT_OBJECT_COLLIDER) {
-				continue; /* colliders' surfaces (plait_collider.first) never push each other */
+			const plait_material *ma = &sim->materials[oa->material], *mb = &sim->materials[ob->material];
+			bool collider_a = ma->type == PLAIT_OBJECT_COLLIDER,
+			     collider_b = mb->type == PLAIT_OBJECT_COLLIDER;
+			if ((collider_a && collider_b) || (collider_a && mb->collider_flag == PLAIT_COLLIDE_VERTEX) ||
+			    (collider_b && ma->collider_flag == PLAIT_COLLIDE_VERTEX)) {
+				/* Colliders' surfaces (plait_collider.first) never push each other, nor cloth
+				 * that meets colliders with its vertices only (contact.c does that). */
+				continue;
 			}
 			object_pass between = {pass, oa->first, ob->first};
 			/* At the listing, two objects' boxes also reach across their allowance. */

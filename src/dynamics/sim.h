@@ -38,6 +38,7 @@ typedef struct plait_material {
 	bool collide;
 	bool self_collide;      /* the object collides with itself */
 	int self_flag;          /* cloth: plait_self_collision_flag */
+	int collider_flag;      /* cloth: plait_collision_flag */
 	float self_width_scale; /* cloth: self-collision thickness / thickness */
 	int collision_layer;    /* see plait_surface_def */
 } plait_material;

@@ -1,8 +1,10 @@
 /* plait_world_check_intersections: counts crossing cloth triangles with a hierarchy over all of
  * them, built from the current positions. */
+#include <math.h>
 #include <string.h>
 
 #include "collision/intersect.h"
+#include "collision/closest.h"
 #include "collision/mesh_shape.h"
 #include "core/error.h"
 #include "dynamics/contact.h"
@@ -49,6 +51,72 @@ static void visit_pair(int other, void *context)
 	const vec3 *x = pass->shape->positions;
 	vec3 t[3] = {x[a[0]], x[a[1]], x[a[2]]}, u[3] = {x[b[0]], x[b[1]], x[b[2]]};
 	pass->count += plait_triangles_intersect(t, u);
+}
+
+/* Distance from segment a-b to a triangle (zero when it passes through it). */
+static float segment_triangle_distance(vec3 a, vec3 b, const vec3 *t)
+{
+	vec3 n = v3_cross(v3_sub(t[1], t[0]), v3_sub(t[2], t[0]));
+	float da = v3_dot(v3_sub(a, t[0]), n), db = v3_dot(v3_sub(b, t[0]), n);
+	if ((da <= 0.0f) != (db <= 0.0f)) {
+		vec3 crossing = v3_lerp(a, b, da / (da - db));
+		int region;
+		float w[3];
+		vec3 q = plait_closest_point_on_triangle(crossing, t[0], t[1], t[2], &region, w);
+		if (v3_length_sq(v3_sub(q, crossing)) <= 1e-12f * v3_length_sq(v3_sub(b, a))) {
+			return 0.0f;
+		}
+	}
+	int region;
+	float w[3];
+	float best = v3_length(v3_sub(plait_closest_point_on_triangle(a, t[0], t[1], t[2], &region, w), a));
+	best = plait_minf(best,
+	                  v3_length(v3_sub(plait_closest_point_on_triangle(b, t[0], t[1], t[2], &region, w), b)));
+	for (int k = 0; k < 3; ++k) {
+		float s, u;
+		best = plait_minf(best, sqrtf(plait_closest_segments(a, b, t[k], t[(k + 1) % 3], &s, &u)));
+	}
+	return best;
+}
+
+/* Cloth triangles reaching into a sphere or capsule collider by more than the tolerance of
+ * plait_count_penetrations (round shapes have no corners or edges of their own to meet cloth:
+ * only cloth vertices keep cloth out of them). */
+static int triangles_in_round_colliders(const plait_sim *sim, const plait_mesh_shape *soup)
+{
+	int count = 0;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (!c->collide || (c->shape.type != PLAIT_SHAPE_SPHERE && c->shape.type != PLAIT_SHAPE_CAPSULE)) {
+			continue;
+		}
+		plait_rigid r = plait_rigid_from_transform(c->transform_end);
+		for (int t = 0; t < soup->triangle_count; ++t) {
+			const int *tri = soup->triangles[t];
+			if (sim->materials[sim->particles.material[tri[0]]].type == PLAIT_OBJECT_COLLIDER) {
+				continue;
+			}
+			vec3 local[3];
+			float radius = 0.0f;
+			for (int m = 0; m < 3; ++m) {
+				local[m] = plait_rigid_apply_inverse(&r, soup->positions[tri[m]]);
+				radius += sim->particles.radius[tri[m]] / 3.0f;
+			}
+			float distance;
+			if (c->shape.type == PLAIT_SHAPE_SPHERE) {
+				int region;
+				float w[3];
+				vec3 q = plait_closest_point_on_triangle(c->shape.center, local[0], local[1], local[2],
+				                                         &region, w);
+				distance = v3_length(v3_sub(q, c->shape.center));
+			} else {
+				distance = segment_triangle_distance(c->shape.a, c->shape.b, local);
+			}
+			float depth = (c->shape.radius - distance) * r.scale;
+			count += depth > 1e-4f + 0.01f * radius;
+		}
+	}
+	return count;
 }
 
 plait_result plait_world_check_intersections(plait_world_id id, plait_intersection_report *report,
@@ -145,6 +213,7 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 		plait_mesh_shape_visit(&shape, lower, upper, true, visit_pair, &pass);
 	}
 	report->triangle_pairs = pass.count;
+	report->triangles_in_colliders = triangles_in_round_colliders(sim, &shape);
 	plait_mesh_shape_destroy(&shape, a);
 	return PLAIT_OK;
 }

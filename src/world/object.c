@@ -221,6 +221,11 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 		                (int)def->self_collision_flag);
 		return id;
 	}
+	if (def->collision_flag < PLAIT_COLLIDE_FULL_SURFACE || def->collision_flag > PLAIT_COLLIDE_VERTEX) {
+		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown collision flag %d", label,
+		                (int)def->collision_flag);
+		return id;
+	}
 	if (def->tethers < PLAIT_TETHER_NONE || def->tethers > PLAIT_TETHER_GEODESIC) {
 		plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "%s: unknown tether mode %d", label,
 		                (int)def->tethers);
@@ -327,6 +332,7 @@ plait_object_id plait_create_cloth(plait_world_id world_id, const plait_cloth_de
 	mat->lift = def->lift;
 	mat->self_collide = def->self_collide;
 	mat->self_flag = (int)def->self_collision_flag;
+	mat->collider_flag = (int)def->collision_flag;
 	mat->self_width_scale = def->self_collide_width_scale;
 	object->material = material;
 	object->first_particle = sim->particles.count;

@@ -10,6 +10,7 @@
 _Static_assert(sizeof(plait_bend_model) == sizeof(int), "plait_bend_model is not an int");
 _Static_assert(sizeof(plait_tether_mode) == sizeof(int), "plait_tether_mode is not an int");
 _Static_assert(sizeof(plait_self_collision_flag) == sizeof(int), "plait_self_collision_flag is not an int");
+_Static_assert(sizeof(plait_collision_flag) == sizeof(int), "plait_collision_flag is not an int");
 
 // The names of enum values as scene files write them, indexed by value.
 static const char *const plait_bend_models[] = {
@@ -25,6 +26,10 @@ static const char *const plait_self_collision_flags[] = {
     [PLAIT_SELF_COLLIDE_FULL_SURFACE] = "full_surface",
     [PLAIT_SELF_COLLIDE_VERTEX_FACE] = "vertex_face",
     [PLAIT_SELF_COLLIDE_VERTEX] = "vertex",
+};
+static const char *const plait_collision_flags[] = {
+    [PLAIT_COLLIDE_FULL_SURFACE] = "full_surface",
+    [PLAIT_COLLIDE_VERTEX] = "vertex",
 };
 
 // Ranges as (min, max, min_excluded).
@@ -124,6 +129,7 @@ static const plait_scene_key plait_cloth_keys[] = {
     PLAIT_FLOAT("tether_stiffness", PLAIT_BETWEEN(0, 1), plait_cloth_def, tether_stiffness),
     PLAIT_BOOL("self_collide", plait_cloth_def, self_collide),
     PLAIT_CHOICE("self_collision_flag", plait_self_collision_flags, plait_cloth_def, self_collision_flag),
+    PLAIT_CHOICE("collision_flag", plait_collision_flags, plait_cloth_def, collision_flag),
     // Range checked by the library when the cloth is created.
     PLAIT_FLOAT("self_collide_width_scale", PLAIT_ANY, plait_cloth_def, self_collide_width_scale),
 };
