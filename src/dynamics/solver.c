@@ -52,11 +52,19 @@ static void clear_floats(float *values, int count)
 	}
 }
 
+/* A rigid distance block (no compliance) never reads its multipliers: left alone. */
+static void reset_distance_multipliers(plait_distance_block *block)
+{
+	if (block->compliant_count > 0) {
+		clear_floats(block->lambda, block->count);
+	}
+}
+
 static void reset_multipliers(plait_sim *sim)
 {
-	clear_floats(sim->stretch.lambda, sim->stretch.count);
-	clear_floats(sim->shear.lambda, sim->shear.count);
-	clear_floats(sim->bend_distance.lambda, sim->bend_distance.count);
+	reset_distance_multipliers(&sim->stretch);
+	reset_distance_multipliers(&sim->shear);
+	reset_distance_multipliers(&sim->bend_distance);
 	clear_floats(sim->bend.lambda, sim->bend.count);
 	clear_floats(sim->rod_bend.lambda, sim->rod_bend.count);
 }
