@@ -83,7 +83,8 @@ typedef struct plait_mesh_contacts {
 	bool list_valid; /* the list of the last gather may serve again (see list_covers) */
 	int pair_count, pair_capacity;
 	contact_pair *pairs;
-	bool out_of_memory; /* the candidate list could not grow: a contact may be left to the failsafe */
+	bool out_of_memory;   /* the candidate list could not grow: a contact may be left to the failsafe */
+	int traversal_sweeps; /* primitive pairs swept by the failsafe's last traversal (0 before it) */
 	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
 	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
 	 * long as no vertex is farther than its guard from where it was then (list_covers). */
@@ -593,6 +594,7 @@ typedef struct pair_pass {
 	int excluded_count, excluded_capacity;
 	int (*excluded)[2];
 	bool failed;
+	int swept; /* STAGE_FAILSAFE: primitive pairs swept */
 } pair_pass;
 
 static bool shares_vertex(const int *v, int n)
@@ -717,6 +719,7 @@ static void sweep_pair(pair_pass *pass, int type, const int *v)
 	vec3 start[4] = {{0}}, end[4] = {{0}};
 	gather_points(p->x_prev, v, n, start);
 	gather_current(p->point, v, n, end);
+	pass->swept += 1;
 	if (paths_apart(type, start, end, pass->failsafe_distance)) {
 		return;
 	}
@@ -1184,7 +1187,7 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
 	const plait_particles *p = &sim->particles;
-	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	for (int k = 0; k < mc->object_count && !pass.failed; ++k) {
 		collision_object *o = &mc->objects[k];
 		if (!o->self) {
@@ -1257,7 +1260,7 @@ static void gather(plait_sim *sim, plait_mesh_contacts *mc)
 		}
 	}
 	fit_boxes(sim, mc, false, 0.0f);
-	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	traverse_objects(mc, &pass);
 	mc->list_valid = !mc->out_of_memory;
 }
@@ -1649,7 +1652,7 @@ static void forget_rest_bounds(plait_mesh_contacts *mc)
 
 static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
 {
-	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	sweep_rest_pairs(&pass);
 	if (from_list) {
 		for (int k = 0; k < mc->pair_count; ++k) {
@@ -1661,6 +1664,7 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 	}
 	fit_boxes(sim, mc, true, distance);
 	traverse_objects(mc, &pass);
+	mc->traversal_sweeps = pass.swept;
 	return pass.hits;
 }
 
@@ -1675,8 +1679,18 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 	}
 	plait_particles *p = &sim->particles;
 	float distance = FAILSAFE_DISTANCE;
+	/* A list that no longer covers is gathered again here, rather than replaced by a traversal
+	 * over the paths, when the last list was no longer than that traversal's sweeps: then it
+	 * costs about the same, covers the substep from its start (the guards hold the motion so
+	 * far), and often serves the next substep too. Layers lying on each other list far more
+	 * pairs than their paths meet, and keep the traversal. */
+	bool covers = list_covers(sim, mc, true);
+	if (!covers && mc->pair_count <= mc->traversal_sweeps) {
+		gather(sim, mc);
+		covers = mc->list_valid;
+	}
 	for (int round = 0; round < ZONE_ROUNDS + FREEZE_ROUNDS; ++round) {
-		int hits = find_crossings(sim, mc, distance, round == 0 && list_covers(sim, mc, true));
+		int hits = find_crossings(sim, mc, distance, round == 0 && covers);
 		if (hits == 0) {
 			break;
 		}
