@@ -46,3 +46,40 @@ float plait_closest_segments(vec3 p1, vec3 q1, vec3 p2, vec3 q2, float *s, float
 	vec3 c1 = v3_mul_add(p1, *s, d1), c2 = v3_mul_add(p2, *t, d2);
 	return v3_length_sq(v3_sub(c1, c2));
 }
+
+float plait_segments_gap(vec3 p, vec3 q, vec3 r, vec3 s)
+{
+	vec3 d = v3_sub(v3_add(r, s), v3_add(p, q)); /* twice the line between the midpoints */
+	float length = v3_length(d);
+	if (!(length > 0.0f)) {
+		return 0.0f;
+	}
+	vec3 u = v3_scale(d, 1.0f / length);
+	return 0.5f * (length - fabsf(v3_dot(u, v3_sub(q, p))) - fabsf(v3_dot(u, v3_sub(s, r))));
+}
+
+float plait_point_triangle_gap(vec3 x, const vec3 *t, vec3 centre, vec3 normal)
+{
+	vec3 d = v3_sub(x, centre);
+	/* Less the triangle's own spread along the normal: nothing when the normal is exact, and
+	 * still a bound when rounding tilted it (a nearly degenerate triangle). */
+	float spread = plait_maxf(
+	    plait_maxf(fabsf(v3_dot(normal, v3_sub(t[0], centre))), fabsf(v3_dot(normal, v3_sub(t[1], centre)))),
+	    fabsf(v3_dot(normal, v3_sub(t[2], centre))));
+	float height = fabsf(v3_dot(normal, d)) - spread;
+	float length = v3_length(d);
+	if (!(length > 0.0f)) {
+		return height;
+	}
+	vec3 u = v3_scale(d, 1.0f / length);
+	float reach = plait_maxf(plait_maxf(v3_dot(u, v3_sub(t[0], centre)), v3_dot(u, v3_sub(t[1], centre))),
+	                         v3_dot(u, v3_sub(t[2], centre)));
+	return plait_maxf(height, length - reach);
+}
+
+vec3 plait_triangle_normal(const vec3 *t)
+{
+	vec3 n = v3_cross(v3_sub(t[1], t[0]), v3_sub(t[2], t[0]));
+	float length = v3_length(n);
+	return length > 0.0f ? v3_scale(n, 1.0f / length) : v3(0.0f, 0.0f, 0.0f);
+}

@@ -13,4 +13,20 @@ float plait_closest_on_segment(vec3 p, vec3 a, vec3 b);
  * segments; returns the squared distance between them. */
 float plait_closest_segments(vec3 p1, vec3 q1, vec3 p2, vec3 q2, float *s, float *t);
 
+/* Cheap lower bounds of distances, from projections on an axis (a projection on a unit axis
+ * lengthens no distance). Exact up to rounding for primitives apart along the axis used,
+ * weaker otherwise. */
+
+/* Segments p-q and r-s (points are segments of length zero): the gap between their intervals
+ * along the line through their midpoints. */
+float plait_segments_gap(vec3 p, vec3 q, vec3 r, vec3 s);
+
+/* Point x and triangle t[0..2], given a point `centre` of the triangle (its centroid, say) and
+ * its unit normal (any unit vector is safe; zero for a degenerate triangle): the larger of the
+ * gaps between x and the triangle along the normal and along the line from the centre to x. */
+float plait_point_triangle_gap(vec3 x, const vec3 *t, vec3 centre, vec3 normal);
+
+/* The unit normal of triangle t[0..2] (counter-clockwise), zero when it is degenerate. */
+vec3 plait_triangle_normal(const vec3 *t);
+
 #endif

@@ -40,6 +40,13 @@ typedef struct collision_object {
 	plait_element_tree tree;
 } collision_object;
 
+/* An element's box, centroid and normal at the gather, for its cheap rejections. */
+typedef struct element_shape {
+	vec3 lower, upper;
+	vec3 centre;
+	vec3 normal; /* triangles: unit normal (zero when degenerate) */
+} element_shape;
+
 typedef struct contact_pair {
 	int v[4];
 	uint8_t type;
@@ -55,9 +62,10 @@ typedef struct contact_pair {
 typedef struct plait_mesh_contacts {
 	int element_count;
 	element *elements;
-	float *element_reach; /* an element's largest radius (at the last listing) */
-	float *element_guard; /* an element's largest guard (at the last listing) */
-	vec3 *lower, *upper;  /* element boxes */
+	float *element_reach;  /* an element's largest radius (at the last listing) */
+	float *element_guard;  /* an element's largest guard (at the last listing) */
+	element_shape *shapes; /* at the last listing */
+	vec3 *lower, *upper;   /* element boxes */
 	int object_count;
 	collision_object *objects;
 	/* Neighbours in the start shape. Within a self-colliding object, primitives closer than
@@ -75,7 +83,8 @@ typedef struct plait_mesh_contacts {
 	bool list_valid; /* the list of the last gather may serve again (see list_covers) */
 	int pair_count, pair_capacity;
 	contact_pair *pairs;
-	bool out_of_memory; /* the candidate list could not grow: a contact may be left to the failsafe */
+	bool out_of_memory;   /* the candidate list could not grow: a contact may be left to the failsafe */
+	int traversal_sweeps; /* primitive pairs swept by the failsafe's last traversal (0 before it) */
 	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
 	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
 	 * long as no vertex is farther than its guard from where it was then (list_covers). */
@@ -121,6 +130,8 @@ static void free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
 	plait_free(a, mc->element_reach);
 	plait_free(a, mc->element_guard);
 	mc->element_guard = NULL;
+	plait_free(a, mc->shapes);
+	mc->shapes = NULL;
 	plait_free(a, mc->lower);
 	plait_free(a, mc->upper);
 	for (int k = 0; k < mc->object_count; ++k) {
@@ -212,6 +223,7 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->elements = plait_alloc_zero(a, (size_t)count, sizeof *mc->elements);
 	mc->element_reach = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->shapes = plait_alloc_zero(a, (size_t)count, sizeof *mc->shapes);
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	edge_key *edges = plait_alloc_zero(a, (size_t)(triangles > 0 ? 3 * triangles : 1), sizeof *edges);
@@ -220,7 +232,8 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->objects =
 	    plait_alloc_zero(a, (size_t)(sim->surface_count + sim->chain_count + points), sizeof *mc->objects);
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
-	          mc->lower != NULL && mc->upper != NULL && edges != NULL && owned != NULL && mc->objects != NULL;
+	          mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL && edges != NULL &&
+	          owned != NULL && mc->objects != NULL;
 	if (ok) {
 		int e = 0, edge_count = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {
@@ -458,6 +471,27 @@ static float primitive_distance(int type, const vec3 *x)
 	}
 }
 
+/* Cheap lower bounds of primitive_distance (closest.h), less a rounding allowance (scene units,
+ * well under every margin): most pairs the traversals meet are neighbours in the cloth, about an
+ * edge apart, and these settle them without the closest points. */
+#define REJECT_SLACK 1e-5f
+
+static float distance_lower_bound(int type, const vec3 *x)
+{
+	switch (type) {
+	case PAIR_VERTEX_FACE: {
+		vec3 c = v3_scale(v3_add(v3_add(x[1], x[2]), x[3]), 1.0f / 3.0f);
+		return plait_point_triangle_gap(x[0], x + 1, c, plait_triangle_normal(x + 1)) - REJECT_SLACK;
+	}
+	case PAIR_EDGE_EDGE:
+		return plait_segments_gap(x[0], x[1], x[2], x[3]) - REJECT_SLACK;
+	case PAIR_VERTEX_EDGE:
+		return plait_segments_gap(x[0], x[0], x[1], x[2]) - REJECT_SLACK;
+	default:
+		return v3_length(v3_sub(x[0], x[1])) - REJECT_SLACK;
+	}
+}
+
 static void gather_points(const vec3 *source, const int *v, int n, vec3 *out)
 {
 	for (int k = 0; k < n; ++k) {
@@ -517,11 +551,18 @@ static float largest_motion(int type, const vec3 *start, const vec3 *end)
 	return first + second;
 }
 
-/* A lower bound of the distance between the primitives over the substep. */
-static float closest_approach_bound(int type, const vec3 *start, const vec3 *end)
+/* Whether a lower bound of the distance between the primitives over the substep exceeds
+ * `distance`: from the cheap bounds first, from the closest points when they do not settle
+ * it. */
+static bool paths_apart(int type, const vec3 *start, const vec3 *end, float distance)
 {
+	float motion = largest_motion(type, start, end);
+	float quick = distance_lower_bound(type, start) + distance_lower_bound(type, end) - motion;
+	if (0.5f * quick > distance) {
+		return true;
+	}
 	float d0 = primitive_distance(type, start), d1 = primitive_distance(type, end);
-	return 0.5f * (d0 + d1 - largest_motion(type, start, end));
+	return 0.5f * (d0 + d1 - motion) > distance;
 }
 
 /* ---- Which primitive pairs exist --------------------------------------------------------- */
@@ -553,6 +594,7 @@ typedef struct pair_pass {
 	int excluded_count, excluded_capacity;
 	int (*excluded)[2];
 	bool failed;
+	int swept; /* STAGE_FAILSAFE: primitive pairs swept */
 } pair_pass;
 
 static bool shares_vertex(const int *v, int n)
@@ -677,7 +719,8 @@ static void sweep_pair(pair_pass *pass, int type, const int *v)
 	vec3 start[4] = {{0}}, end[4] = {{0}};
 	gather_points(p->x_prev, v, n, start);
 	gather_current(p->point, v, n, end);
-	if (closest_approach_bound(type, start, end) > pass->failsafe_distance) {
+	pass->swept += 1;
+	if (paths_apart(type, start, end, pass->failsafe_distance)) {
 		return;
 	}
 	if (paths_meet(type, start, end, pass->failsafe_distance)) {
@@ -816,9 +859,104 @@ static bool self_allows(const plait_material *m, int type)
 	}
 }
 
+/* Whether boxes [la, ua] and [lb, ub] are farther apart than `gap` along an axis. */
+static bool boxes_apart(vec3 la, vec3 ua, vec3 lb, vec3 ub, float gap)
+{
+	return la.x - ub.x > gap || lb.x - ua.x > gap || la.y - ub.y > gap || lb.y - ua.y > gap ||
+	       la.z - ub.z > gap || lb.z - ua.z > gap;
+}
+
+/* Whether a point is surely farther than `gap` from an element (its box, then a cheap bound). */
+static bool point_far(vec3 x, const element *el, const element_shape *shape, const vec3 *t, float gap)
+{
+	if (boxes_apart(x, x, shape->lower, shape->upper, gap)) {
+		return true;
+	}
+	float bound = el->size == 3   ? plait_point_triangle_gap(x, t, shape->centre, shape->normal)
+	              : el->size == 2 ? plait_segments_gap(x, x, t[0], t[1])
+	                              : v3_length(v3_sub(x, t[0]));
+	return bound - REJECT_SLACK > gap;
+}
+
+/* Whether segments p-q and r-s are surely farther apart than `gap`. */
+static bool segments_far(vec3 p, vec3 q, vec3 r, vec3 s, float gap)
+{
+	return boxes_apart(v3_min(p, q), v3_max(p, q), v3_min(r, s), v3_max(r, s), gap) ||
+	       plait_segments_gap(p, q, r, s) - REJECT_SLACK > gap;
+}
+
+/* The gather's walk of an element pair: the same primitive pairs in the same order as the
+ * general walk of visit_elements, but most are rejected here, from the elements' points
+ * (loaded once) and shapes, before visit_primitives loads them again for its exact test. */
+static void gather_element_pair(pair_pass *pass, int a, int b, const plait_material *ma,
+                                const plait_material *mb, bool self)
+{
+	const plait_particles *p = &pass->sim->particles;
+	const element *ea = &pass->mc->elements[a], *eb = &pass->mc->elements[b];
+	const element_shape *shape[2] = {&pass->mc->shapes[a], &pass->mc->shapes[b]};
+	vec3 x[2][3];
+	for (int k = 0; k < 3; ++k) {
+		x[0][k] = p->point[ea->v[k]].x;
+		x[1][k] = p->point[eb->v[k]].x;
+	}
+	float gap = pass->list_distance;
+	int v[4];
+	for (int turn = 0; turn < 2; ++turn) {
+		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
+		const element_shape *os = shape[1 - turn];
+		const vec3 *vx = x[turn], *ox = x[1 - turn];
+		const plait_material *mv = turn == 0 ? ma : mb, *mo = turn == 0 ? mb : ma;
+		for (int k = 0; k < vertex_side->size; ++k) {
+			if (!(vertex_side->own_vertices & (1u << k))) {
+				continue;
+			}
+			v[0] = vertex_side->v[k];
+			bool far = point_far(vx[k], other, os, ox, gap);
+			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) && !far) {
+				v[1] = other->v[0];
+				v[2] = other->v[1];
+				v[3] = other->v[2];
+				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
+			}
+			if (other->size == 2 && vertex_side->size == 1 && !far) {
+				v[1] = other->v[0];
+				v[2] = other->v[1];
+				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
+			}
+			if (turn == 0 && self && self_allows(ma, PAIR_VERTEX_VERTEX) && !far) {
+				for (int m = 0; m < other->size; ++m) {
+					if ((other->own_vertices & (1u << m)) && !boxes_apart(vx[k], vx[k], ox[m], ox[m], gap)) {
+						v[1] = other->v[m];
+						visit_primitives(pass, PAIR_VERTEX_VERTEX, v, mv, mo, self);
+					}
+				}
+			}
+		}
+	}
+	if (ea->size >= 2 && eb->size >= 2 && (!self || self_allows(ma, PAIR_EDGE_EDGE))) {
+		int edges_a = ea->size == 2 ? 1 : 3, edges_b = eb->size == 2 ? 1 : 3;
+		for (int i = 0; i < edges_a; ++i) {
+			if (!(ea->own_edges & (1u << i))) {
+				continue;
+			}
+			int i1 = i + 1 < ea->size ? i + 1 : 0;
+			for (int j = 0; j < edges_b; ++j) {
+				int j1 = j + 1 < eb->size ? j + 1 : 0;
+				if (!(eb->own_edges & (1u << j)) || segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap)) {
+					continue;
+				}
+				v[0] = ea->v[i];
+				v[1] = ea->v[i1];
+				v[2] = eb->v[j];
+				v[3] = eb->v[j1];
+				visit_primitives(pass, PAIR_EDGE_EDGE, v, ma, mb, self);
+			}
+		}
+	}
+}
+
 static void visit_elements(int a, int b, void *context)
 {
-
 	pair_pass *pass = context;
 	const plait_mesh_contacts *mc = pass->mc;
 	const element *ea = &mc->elements[a], *eb = &mc->elements[b];
@@ -843,6 +981,8 @@ static void visit_elements(int a, int b, void *context)
 			pass->list_distance += allowance;
 			pass->pair_slack += allowance;
 		}
+		gather_element_pair(pass, a, b, ma, mb, self);
+		return;
 	}
 	int v[4];
 	for (int turn = 0; turn < 2; ++turn) {
@@ -937,6 +1077,18 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 		}
 		float g = margin;
 		if (!paths) {
+			element_shape *shape = &mc->shapes[e];
+			shape->lower = lower;
+			shape->upper = upper;
+			vec3 c = p->point[el->v[0]].x;
+			for (int k = 1; k < el->size; ++k) {
+				c = v3_add(c, p->point[el->v[k]].x);
+			}
+			shape->centre = v3_scale(c, 1.0f / (float)el->size);
+			if (el->size == 3) {
+				vec3 t[3] = {p->point[el->v[0]].x, p->point[el->v[1]].x, p->point[el->v[2]].x};
+				shape->normal = plait_triangle_normal(t);
+			}
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
 			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
@@ -1044,7 +1196,7 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
 	const plait_particles *p = &sim->particles;
-	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	for (int k = 0; k < mc->object_count && !pass.failed; ++k) {
 		collision_object *o = &mc->objects[k];
 		if (!o->self) {
@@ -1117,7 +1269,7 @@ static void gather(plait_sim *sim, plait_mesh_contacts *mc)
 		}
 	}
 	fit_boxes(sim, mc, false, 0.0f);
-	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	traverse_objects(mc, &pass);
 	mc->list_valid = !mc->out_of_memory;
 }
@@ -1509,7 +1661,7 @@ static void forget_rest_bounds(plait_mesh_contacts *mc)
 
 static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
 {
-	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, 0.0f, false, 0, 0, NULL, false};
+	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	sweep_rest_pairs(&pass);
 	if (from_list) {
 		for (int k = 0; k < mc->pair_count; ++k) {
@@ -1521,6 +1673,7 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 	}
 	fit_boxes(sim, mc, true, distance);
 	traverse_objects(mc, &pass);
+	mc->traversal_sweeps = pass.swept;
 	return pass.hits;
 }
 
@@ -1535,8 +1688,18 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 	}
 	plait_particles *p = &sim->particles;
 	float distance = FAILSAFE_DISTANCE;
+	/* A list that no longer covers is gathered again here, rather than replaced by a traversal
+	 * over the paths, when the last list was no longer than that traversal's sweeps: then it
+	 * costs about the same, covers the substep from its start (the guards hold the motion so
+	 * far), and often serves the next substep too. Layers lying on each other list far more
+	 * pairs than their paths meet, and keep the traversal. */
+	bool covers = list_covers(sim, mc, true);
+	if (!covers && mc->pair_count <= mc->traversal_sweeps) {
+		gather(sim, mc);
+		covers = mc->list_valid;
+	}
 	for (int round = 0; round < ZONE_ROUNDS + FREEZE_ROUNDS; ++round) {
-		int hits = find_crossings(sim, mc, distance, round == 0 && list_covers(sim, mc, true));
+		int hits = find_crossings(sim, mc, distance, round == 0 && covers);
 		if (hits == 0) {
 			break;
 		}
