@@ -888,6 +888,14 @@ static bool segments_far(vec3 p, vec3 q, vec3 r, vec3 s, float gap)
 /* The gather's walk of an element pair: the same primitive pairs in the same order as the
  * general walk of visit_elements, but most are rejected here, from the elements' points
  * (loaded once) and shapes, before visit_primitives loads them again for its exact test. */
+/* Whether a vertex of material mv meets a triangle of material mo here. A collider's faces
+ * meet other objects' vertices in the collider pass (contact.c: continuous, with the trapped
+ * check); here they meet only their edges, and their corners the others' triangles. */
+static bool vertex_meets_face(const plait_material *mv, const plait_material *mo)
+{
+	return mo->type != PLAIT_OBJECT_COLLIDER || mv->type == PLAIT_OBJECT_COLLIDER;
+}
+
 static void gather_element_pair(pair_pass *pass, int a, int b, const plait_material *ma,
                                 const plait_material *mb, bool self)
 {
@@ -912,7 +920,8 @@ static void gather_element_pair(pair_pass *pass, int a, int b, const plait_mater
 			}
 			v[0] = vertex_side->v[k];
 			bool far = point_far(vx[k], other, os, ox, gap);
-			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) && !far) {
+			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
+			    vertex_meets_face(mv, mo) && !far) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				v[3] = other->v[2];
@@ -993,7 +1002,8 @@ static void visit_elements(int a, int b, void *context)
 				continue;
 			}
 			v[0] = vertex_side->v[k];
-			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE))) {
+			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
+			    vertex_meets_face(mv, mo)) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				v[3] = other->v[2];
