@@ -885,9 +885,6 @@ static bool segments_far(vec3 p, vec3 q, vec3 r, vec3 s, float gap)
 	       plait_segments_gap(p, q, r, s) - REJECT_SLACK > gap;
 }
 
-/* The gather's walk of an element pair: the same primitive pairs in the same order as the
- * general walk of visit_elements, but most are rejected here, from the elements' points
- * (loaded once) and shapes, before visit_primitives loads them again for its exact test. */
 /* Whether a vertex of material mv meets a triangle of material mo here. A collider's faces
  * meet other objects' vertices in the collider pass (contact.c: continuous, with the trapped
  * check); here they meet only their edges, and their corners the others' triangles. */
@@ -896,16 +893,23 @@ static bool vertex_meets_face(const plait_material *mv, const plait_material *mo
 	return mo->type != PLAIT_OBJECT_COLLIDER || mv->type == PLAIT_OBJECT_COLLIDER;
 }
 
-static void gather_element_pair(pair_pass *pass, int a, int b, const plait_material *ma,
-                                const plait_material *mb, bool self)
+/* The primitive pairs an element pair owns, each handed to visit_primitives. In the gather,
+ * most are rejected first from the elements' points (loaded once) and shapes, before
+ * visit_primitives loads them again for its exact test; the other stages see them all. The
+ * failsafe leaves vertex-vertex pairs out (nothing to cross). */
+static void walk_element_pair(pair_pass *pass, int a, int b, const plait_material *ma,
+                              const plait_material *mb, bool self)
 {
-	const plait_particles *p = &pass->sim->particles;
 	const element *ea = &pass->mc->elements[a], *eb = &pass->mc->elements[b];
+	bool cull = pass->stage == STAGE_GATHER, failsafe = pass->stage == STAGE_FAILSAFE;
 	const element_shape *shape[2] = {&pass->mc->shapes[a], &pass->mc->shapes[b]};
-	vec3 x[2][3];
-	for (int k = 0; k < 3; ++k) {
-		x[0][k] = p->point[ea->v[k]].x;
-		x[1][k] = p->point[eb->v[k]].x;
+	vec3 x[2][3] = {{{0}}};
+	if (cull) {
+		const plait_particles *p = &pass->sim->particles;
+		for (int k = 0; k < 3; ++k) {
+			x[0][k] = p->point[ea->v[k]].x;
+			x[1][k] = p->point[eb->v[k]].x;
+		}
 	}
 	float gap = pass->list_distance;
 	int v[4];
@@ -919,7 +923,7 @@ static void gather_element_pair(pair_pass *pass, int a, int b, const plait_mater
 				continue;
 			}
 			v[0] = vertex_side->v[k];
-			bool far = point_far(vx[k], other, os, ox, gap);
+			bool far = cull && point_far(vx[k], other, os, ox, gap);
 			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
 			    vertex_meets_face(mv, mo) && !far) {
 				v[1] = other->v[0];
@@ -932,9 +936,10 @@ static void gather_element_pair(pair_pass *pass, int a, int b, const plait_mater
 				v[2] = other->v[1];
 				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
 			}
-			if (turn == 0 && self && self_allows(ma, PAIR_VERTEX_VERTEX) && !far) {
+			if (turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX) && !far) {
 				for (int m = 0; m < other->size; ++m) {
-					if ((other->own_vertices & (1u << m)) && !boxes_apart(vx[k], vx[k], ox[m], ox[m], gap)) {
+					if ((other->own_vertices & (1u << m)) &&
+					    !(cull && boxes_apart(vx[k], vx[k], ox[m], ox[m], gap))) {
 						v[1] = other->v[m];
 						visit_primitives(pass, PAIR_VERTEX_VERTEX, v, mv, mo, self);
 					}
@@ -951,7 +956,8 @@ static void gather_element_pair(pair_pass *pass, int a, int b, const plait_mater
 			int i1 = i + 1 < ea->size ? i + 1 : 0;
 			for (int j = 0; j < edges_b; ++j) {
 				int j1 = j + 1 < eb->size ? j + 1 : 0;
-				if (!(eb->own_edges & (1u << j)) || segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap)) {
+				if (!(eb->own_edges & (1u << j)) ||
+				    (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap))) {
 					continue;
 				}
 				v[0] = ea->v[i];
@@ -975,7 +981,6 @@ static void visit_elements(int a, int b, void *context)
 	if (self && excluded(mc, a, b)) {
 		return;
 	}
-	bool failsafe = pass->stage == STAGE_FAILSAFE;
 	pass->all_rest = true;
 	if (pass->stage == STAGE_GATHER) {
 		/* One list distance for every primitive pair of the two elements, from their largest
@@ -990,58 +995,8 @@ static void visit_elements(int a, int b, void *context)
 			pass->list_distance += allowance;
 			pass->pair_slack += allowance;
 		}
-		gather_element_pair(pass, a, b, ma, mb, self);
-		return;
 	}
-	int v[4];
-	for (int turn = 0; turn < 2; ++turn) {
-		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
-		const plait_material *mv = turn == 0 ? ma : mb, *mo = turn == 0 ? mb : ma;
-		for (int k = 0; k < vertex_side->size; ++k) {
-			if (!(vertex_side->own_vertices & (1u << k))) {
-				continue;
-			}
-			v[0] = vertex_side->v[k];
-			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
-			    vertex_meets_face(mv, mo)) {
-				v[1] = other->v[0];
-				v[2] = other->v[1];
-				v[3] = other->v[2];
-				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
-			}
-			if (other->size == 2 && vertex_side->size == 1) {
-				v[1] = other->v[0];
-				v[2] = other->v[1];
-				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
-			}
-			if (turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX)) {
-				for (int m = 0; m < other->size; ++m) {
-					if (other->own_vertices & (1u << m)) {
-						v[1] = other->v[m];
-						visit_primitives(pass, PAIR_VERTEX_VERTEX, v, mv, mo, self);
-					}
-				}
-			}
-		}
-	}
-	if (ea->size >= 2 && eb->size >= 2 && (!self || self_allows(ma, PAIR_EDGE_EDGE))) {
-		int edges_a = ea->size == 2 ? 1 : 3, edges_b = eb->size == 2 ? 1 : 3;
-		for (int i = 0; i < edges_a; ++i) {
-			if (!(ea->own_edges & (1u << i))) {
-				continue;
-			}
-			for (int j = 0; j < edges_b; ++j) {
-				if (!(eb->own_edges & (1u << j))) {
-					continue;
-				}
-				v[0] = ea->v[i];
-				v[1] = ea->v[(i + 1) % ea->size];
-				v[2] = eb->v[j];
-				v[3] = eb->v[(j + 1) % eb->size];
-				visit_primitives(pass, PAIR_EDGE_EDGE, v, ma, mb, self);
-			}
-		}
-	}
+	walk_element_pair(pass, a, b, ma, mb, self);
 	if (pass->stage == STAGE_REST && pass->all_rest && !pass->failed) {
 		if (pass->excluded_count + 2 > pass->excluded_capacity) {
 			int capacity = pass->excluded_capacity < 1024 ? 1024 : 2 * pass->excluded_capacity;
