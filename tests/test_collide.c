@@ -178,6 +178,39 @@ static plait_world_id weightless_world(void)
 	return plait_create_world(&def, NULL);
 }
 
+/* A 2 m sheet of 4 x 4 quads (0.5 m) at 0.6 m, 1 cm thick, placed so that an obstacle at the
+ * origin narrower than 0.5 m lies under the middle of one quad, between its vertices. */
+static plait_object_id add_coarse_sheet(plait_world_id world)
+{
+	test_grid grid = test_grid_make(4, 4, 2.0f, 2.0f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].x += 0.25f;
+		grid.positions[i].z += 0.25f;
+		grid.positions[i].y = 0.6f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.01f;
+	plait_error error;
+	plait_object_id cloth = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	test_grid_free(&grid);
+	return cloth;
+}
+
+/* The height of a coarse sheet's highest vertex. */
+static float highest_vertex(plait_object_id sheet)
+{
+	plait_vec3 x[25];
+	cr_assert_eq(plait_object_get_vertex_count(sheet), 25);
+	plait_object_get_positions(sheet, 0, 25, x, NULL);
+	float highest = -INFINITY;
+	for (int i = 0; i < 25; ++i) {
+		highest = fmaxf(highest, x[i].y);
+	}
+	return highest;
+}
+
 /* A sheet of large quads (0.5 m) dropped on a box narrower than one of them (0.3 m): no vertex
  * of the sheet ever meets the box, so only the box's own corners and edges against the sheet's
  * triangles and edges keep it from poking through. Met through the vertices alone, the box
@@ -191,18 +224,7 @@ static void drop_coarse_sheet_on(plait_collider_def *obstacle, float top)
 	plait_collider_def ground = plait_default_collider_def();
 	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, &error)), "%s", error.message);
 	cr_assert(!plait_object_id_is_null(plait_create_collider(world, obstacle, &error)), "%s", error.message);
-	test_grid grid = test_grid_make(4, 4, 2.0f, 2.0f);
-	for (int i = 0; i < grid.vertex_count; ++i) {
-		/* The box's top lies inside the middle of one quad. */
-		grid.positions[i].x += 0.25f;
-		grid.positions[i].z += 0.25f;
-		grid.positions[i].y = 0.6f;
-	}
-	plait_cloth_def def = plait_default_cloth_def();
-	def.mesh = test_grid_mesh(&grid);
-	def.surface.thickness = 0.01f;
-	plait_object_id cloth = plait_create_cloth(world, &def, &error);
-	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	plait_object_id cloth = add_coarse_sheet(world);
 	for (int frame = 1; frame <= 90; ++frame) {
 		cr_assert(test_step_frames(world, 1));
 		plait_intersection_report report;
@@ -211,15 +233,10 @@ static void drop_coarse_sheet_on(plait_collider_def *obstacle, float top)
 		             report.triangle_pairs);
 		cr_assert_eq(report.inside_colliders, 0, "frame %d", frame);
 	}
-	/* The sheet rests on the box: the quad over it stays up, its lowest point above the box. */
-	plait_vec3 x[25];
-	plait_object_get_positions(cloth, 0, 25, x, NULL);
-	float highest = -INFINITY;
-	for (int i = 0; i < 25; ++i) {
-		highest = fmaxf(highest, x[i].y);
-	}
+	/* The sheet rests on the obstacle: the quad over it stays up, its highest vertex above half
+	 * the obstacle's height. */
+	float highest = highest_vertex(cloth);
 	cr_assert_gt(highest, 0.5f * top, "the sheet lies flat (highest vertex at %g m)", (double)highest);
-	test_grid_free(&grid);
 	plait_destroy_world(world);
 }
 
@@ -269,17 +286,7 @@ Test(collide, box_colliders_keep_their_corners_when_another_collider_goes)
 	cr_assert_eq(plait_object_get_vertex_count(near_box), 0);
 	plait_vec3 unused;
 	cr_assert_neq(plait_object_get_positions(near_box, 0, 1, &unused, &error), PLAIT_OK);
-	test_grid grid = test_grid_make(4, 4, 2.0f, 2.0f);
-	for (int i = 0; i < grid.vertex_count; ++i) {
-		grid.positions[i].x += 0.25f;
-		grid.positions[i].z += 0.25f;
-		grid.positions[i].y = 0.6f;
-	}
-	plait_cloth_def def = plait_default_cloth_def();
-	def.mesh = test_grid_mesh(&grid);
-	def.surface.thickness = 0.01f;
-	plait_object_id cloth = plait_create_cloth(world, &def, &error);
-	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	plait_object_id cloth = add_coarse_sheet(world);
 	cr_assert(test_step_frames(world, 5));
 	plait_destroy_object(far_box);
 	for (int frame = 1; frame <= 60; ++frame) {
@@ -304,14 +311,8 @@ Test(collide, box_colliders_keep_their_corners_when_another_collider_goes)
 		                   (double)particle.y, (double)corners[k].y);
 	}
 	cr_assert_eq(plait_object_get_vertex_count(cloth), 25);
-	plait_vec3 x[25];
-	plait_object_get_positions(cloth, 0, 25, x, NULL);
-	float highest = -INFINITY;
-	for (int i = 0; i < 25; ++i) {
-		highest = fmaxf(highest, x[i].y);
-	}
+	float highest = highest_vertex(cloth);
 	cr_assert_gt(highest, 0.15f, "the sheet fell past the box (highest vertex at %g m)", (double)highest);
-	test_grid_free(&grid);
 	plait_destroy_world(world);
 }
 

@@ -17,6 +17,13 @@ typedef struct check_pass {
 	int count;
 } check_pass;
 
+/* Whether a surface is a colliding mesh or box collider's (its triangles go in the soup). */
+static bool collider_surface(const plait_sim *sim, const plait_surface *surface)
+{
+	const plait_material *m = &sim->materials[surface->material];
+	return m->type == PLAIT_OBJECT_COLLIDER && m->collide;
+}
+
 /* Whether a triangle of the soup is a collider's (its vertices are the collider's particles). */
 static bool collider_triangle(const plait_sim *sim, const int *triangle)
 {
@@ -93,7 +100,7 @@ static int triangles_in_round_colliders(const plait_sim *sim, const plait_mesh_s
 		plait_rigid r = plait_rigid_from_transform(c->transform_end);
 		for (int t = 0; t < soup->triangle_count; ++t) {
 			const int *tri = soup->triangles[t];
-			if (sim->materials[sim->particles.material[tri[0]]].type == PLAIT_OBJECT_COLLIDER) {
+			if (collider_triangle(sim, tri)) {
 				continue;
 			}
 			vec3 local[3];
@@ -142,8 +149,7 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 	cloth_faces = faces;
 	for (int k = 0; k < sim->surface_count; ++k) {
 		const plait_surface *surface = &sim->surfaces[k];
-		if (sim->materials[surface->material].type == PLAIT_OBJECT_COLLIDER &&
-		    sim->materials[surface->material].collide) {
+		if (collider_surface(sim, surface)) {
 			faces += surface->shape->triangle_count;
 			indices += 3 * surface->shape->triangle_count;
 		}
@@ -179,8 +185,7 @@ plait_result plait_world_check_intersections(plait_world_id id, plait_intersecti
 	}
 	for (int m = 0; m < sim->surface_count; ++m) {
 		const plait_surface *surface = &sim->surfaces[m];
-		if (sim->materials[surface->material].type != PLAIT_OBJECT_COLLIDER ||
-		    !sim->materials[surface->material].collide) {
+		if (!collider_surface(sim, surface)) {
 			continue;
 		}
 		for (int t = 0; t < surface->shape->triangle_count; ++t) {
