@@ -18,7 +18,9 @@
  *
  * Prints one line per run: scene, material, threads, ms/frame (median of the runs), the strain
  * |length / rest - 1| of the structural edges at the last frame (max, p99, mean), and bytes of
- * library memory per vertex.
+ * library memory per vertex. --strain-window W adds a line with the worst max and the worst p99
+ * of the strain over the last W frames (measured outside the timed steps): the strain at one
+ * frame depends on where the cloth happens to be, a window shows whether a setting holds.
  *
  * --threads LIST (e.g. 1,2,4; default 1) runs every size with each thread count: K > 1 attaches
  * a pool of K workers (tools/plait/thread_pool.h, the calling thread included) to the world's
@@ -26,7 +28,7 @@
  *
  * usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers none|euclidean|geodesic]
  *                   [--runs R] [--frames F] [--iterations I] [--substeps S] [--threads LIST]
- *                   [--simd auto|scalar|avx2|avx512]
+ *                   [--simd auto|scalar|avx2|avx512] [--strain-window W]
  */
 #include <math.h>
 #include <stdio.h>
@@ -49,7 +51,8 @@ typedef struct plait_thread_pool plait_thread_pool;
 
 typedef struct hang_options {
 	int frames, runs, iterations, substeps;
-	int material; /* 0 default, 1 rigid, 2 stiff */
+	int strain_window; /* > 0: also the worst strain over the last this many frames */
+	int material;      /* 0 default, 1 rigid, 2 stiff */
 	plait_simd simd;
 	plait_tether_mode tethers;
 	plait_thread_pool *pool; /* NULL: one thread */
@@ -71,6 +74,7 @@ static int compare_doubles(const void *a, const void *b)
 typedef struct hang_result {
 	double ms_per_frame;
 	double strain_max, strain_p99, strain_mean;
+	double window_max, window_p99; /* worst max and worst p99 over the strain window */
 	size_t bytes_per_vertex;
 	int nonfinite;
 } hang_result;
@@ -97,6 +101,44 @@ static void counting_free(void *memory, void *context)
 	size_t *block = (size_t *)((char *)memory - 64);
 	allocated_bytes -= block[0];
 	free(block);
+}
+
+/* Strain |length / rest - 1| of the structural edges now: max, p99 and mean into result. */
+static void measure_strain(plait_object_id cloth_id, int n, hang_result *result)
+{
+	int vertex_count = n * n;
+	plait_vec3 *x = malloc(sizeof *x * (size_t)vertex_count);
+	plait_object_get_positions(cloth_id, 0, vertex_count, x, NULL);
+	int edge_count = 2 * n * (n - 1);
+	double *strain = malloc(sizeof *strain * (size_t)edge_count);
+	int e = 0;
+	double rest = 2.0 / (n - 1);
+	for (int j = 0; j < n; ++j) {
+		for (int i = 0; i < n; ++i) {
+			int a = j * n + i;
+			if (i + 1 < n) {
+				plait_vec3 d = {x[a + 1].x - x[a].x, x[a + 1].y - x[a].y, x[a + 1].z - x[a].z};
+				strain[e++] = fabs(sqrt(d.x * d.x + d.y * d.y + d.z * d.z) / rest - 1.0);
+			}
+			if (j + 1 < n) {
+				plait_vec3 d = {x[a + n].x - x[a].x, x[a + n].y - x[a].y, x[a + n].z - x[a].z};
+				strain[e++] = fabs(sqrt(d.x * d.x + d.y * d.y + d.z * d.z) / rest - 1.0);
+			}
+		}
+	}
+	qsort(strain, (size_t)e, sizeof *strain, compare_doubles);
+	double sum = 0.0;
+	for (int k = 0; k < e; ++k) {
+		sum += strain[k];
+		if (!isfinite(strain[k])) {
+			result->nonfinite = 1;
+		}
+	}
+	result->strain_max = strain[e - 1];
+	result->strain_p99 = strain[(int)(0.99 * (e - 1))];
+	result->strain_mean = sum / e;
+	free(strain);
+	free(x);
 }
 
 static hang_result run_hang(int n, const hang_options *options)
@@ -175,49 +217,28 @@ static hang_result run_hang(int n, const hang_options *options)
 	sphere.radius = 0.5f;
 	plait_create_collider(world, &sphere, &error);
 
-	double start = now_seconds();
+	double stepping_seconds = 0.0;
 	for (int frame = 0; frame < options->frames; ++frame) {
-		if (plait_world_step(world, &error) != PLAIT_OK) {
+		double start = now_seconds();
+		plait_result stepped = plait_world_step(world, &error);
+		stepping_seconds += now_seconds() - start;
+		if (stepped != PLAIT_OK) {
 			fprintf(stderr, "bench_hang: frame %d: %s\n", frame, error.message);
 			result.nonfinite = 1;
 			break;
 		}
+		/* Outside the timed part: the strain of each frame of the window. */
+		if (frame >= options->frames - options->strain_window) {
+			hang_result now = {0};
+			measure_strain(cloth_id, n, &now);
+			result.window_max = now.strain_max > result.window_max ? now.strain_max : result.window_max;
+			result.window_p99 = now.strain_p99 > result.window_p99 ? now.strain_p99 : result.window_p99;
+		}
 	}
-	result.ms_per_frame = 1000.0 * (now_seconds() - start) / options->frames;
+	result.ms_per_frame = 1000.0 * stepping_seconds / options->frames;
 	result.bytes_per_vertex = allocated_bytes / (size_t)vertex_count;
 
-	plait_vec3 *x = malloc(sizeof *x * (size_t)vertex_count);
-	plait_object_get_positions(cloth_id, 0, vertex_count, x, NULL);
-	int edge_count = 2 * n * (n - 1);
-	double *strain = malloc(sizeof *strain * (size_t)edge_count);
-	int e = 0;
-	double rest = 2.0 / (n - 1);
-	for (int j = 0; j < n; ++j) {
-		for (int i = 0; i < n; ++i) {
-			int a = j * n + i;
-			if (i + 1 < n) {
-				plait_vec3 d = {x[a + 1].x - x[a].x, x[a + 1].y - x[a].y, x[a + 1].z - x[a].z};
-				strain[e++] = fabs(sqrt(d.x * d.x + d.y * d.y + d.z * d.z) / rest - 1.0);
-			}
-			if (j + 1 < n) {
-				plait_vec3 d = {x[a + n].x - x[a].x, x[a + n].y - x[a].y, x[a + n].z - x[a].z};
-				strain[e++] = fabs(sqrt(d.x * d.x + d.y * d.y + d.z * d.z) / rest - 1.0);
-			}
-		}
-	}
-	qsort(strain, (size_t)e, sizeof *strain, compare_doubles);
-	double sum = 0.0;
-	for (int k = 0; k < e; ++k) {
-		sum += strain[k];
-		if (!isfinite(strain[k])) {
-			result.nonfinite = 1;
-		}
-	}
-	result.strain_max = strain[e - 1];
-	result.strain_p99 = strain[(int)(0.99 * (e - 1))];
-	result.strain_mean = sum / e;
-	free(strain);
-	free(x);
+	measure_strain(cloth_id, n, &result);
 	plait_destroy_world(world);
 	free(positions);
 	free(masses);
@@ -247,7 +268,8 @@ static int parse_thread_list(const char *text, int *counts, int capacity)
 
 int main(int argc, char **argv)
 {
-	hang_options options = {300, 3, 20, 0, 0, PLAIT_SIMD_AUTO, PLAIT_TETHER_NONE, NULL};
+	hang_options options = {
+	    .frames = 300, .runs = 3, .iterations = 20, .simd = PLAIT_SIMD_AUTO, .tethers = PLAIT_TETHER_NONE};
 	int materials = 2; /* bit 0: default, bit 1: rigid, bit 2: stiff */
 	int sizes[16], size_count = 0;
 	int thread_counts[HANG_MAX_THREAD_COUNTS] = {1}, thread_count_count = 1;
@@ -256,6 +278,8 @@ int main(int argc, char **argv)
 			options.runs = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--frames") == 0 && a + 1 < argc) {
 			options.frames = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--strain-window") == 0 && a + 1 < argc) {
+			options.strain_window = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--iterations") == 0 && a + 1 < argc) {
 			options.iterations = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--material") == 0 && a + 1 < argc) {
@@ -293,7 +317,7 @@ int main(int argc, char **argv)
 			fprintf(stderr,
 			        "usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers "
 			        "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S] "
-			        "[--threads LIST] [--simd auto|scalar|avx2|avx512]\n");
+			        "[--threads LIST] [--simd auto|scalar|avx2|avx512] [--strain-window W]\n");
 			return 2;
 		}
 	}
@@ -346,11 +370,18 @@ int main(int argc, char **argv)
 				qsort(times, (size_t)runs, sizeof times[0], compare_doubles);
 				const char *tether_names[3] = {"none", "euclidean", "geodesic"};
 				const char *material_names[3] = {"default", "rigid", "stiff"};
-				printf("scene=hang-%d material=%s tethers=%s threads=%d frames=%d ms_per_frame=%.3f "
-				       "strain_max=%.4f strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu nonfinite=%d\n",
-				       sizes[s], material_names[options.material], tether_names[options.tethers], threads,
-				       options.frames, times[runs / 2], last.strain_max, last.strain_p99, last.strain_mean,
-				       last.bytes_per_vertex, last.nonfinite);
+				printf(
+				    "scene=hang-%d material=%s tethers=%s substeps=%d threads=%d frames=%d "
+				    "ms_per_frame=%.3f strain_max=%.4f strain_p99=%.4f strain_mean=%.5f bytes_per_vertex=%zu "
+				    "nonfinite=%d\n",
+				    sizes[s], material_names[options.material], tether_names[options.tethers],
+				    options.substeps > 0 ? options.substeps : plait_default_world_def().substeps, threads,
+				    options.frames, times[runs / 2], last.strain_max, last.strain_p99, last.strain_mean,
+				    last.bytes_per_vertex, last.nonfinite);
+				if (options.strain_window > 0) {
+					printf("scene=hang-%d strain_window=%d window_max=%.4f window_p99=%.4f\n", sizes[s],
+					       options.strain_window, last.window_max, last.window_p99);
+				}
 				fflush(stdout);
 			}
 		}
