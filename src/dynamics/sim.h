@@ -32,6 +32,7 @@ typedef struct plait_material {
 	float stickiness;
 	float bounce;
 	float damp;                        /* 1/s */
+	float damp_factor;                 /* exp(-damp h) for this frame's substep h; 1 without damp */
 	float point_drag;                  /* curves and particles: drag coefficient of each vertex */
 	float point_area;                  /* m^2: cross-section used with point_drag */
 	float drag, tangential_drag, lift; /* cloth triangles */

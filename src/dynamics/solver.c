@@ -11,6 +11,7 @@
 #include "dynamics/constraints.h"
 #include "dynamics/contact.h"
 #include "dynamics/mesh_contact.h"
+#include "dynamics/particle_step.h"
 
 const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "tether", "collision"};
 
@@ -80,69 +81,13 @@ typedef struct particle_job {
 
 #define PARTICLE_GRAIN 2048
 
-/* What the per-particle stages read of the substep, copied into locals once per range: read
- * through the job, every store to a particle could change them as far as the compiler knows,
- * and it would load them (and divide by h) again for every particle. */
-typedef struct particle_step {
-	float h, inverse_h, t_end, resting_speed;
-	vec3 gravity, half_gravity_step;
-	bool air;
-	const plait_material *materials;
-} particle_step;
-
-static particle_step step_of(const particle_job *job)
+static plait_particle_step step_of(const particle_job *job)
 {
 	vec3 gravity = job->sim->settings.gravity;
-	return (particle_step){job->h,     1.0f / job->h,
-	                       job->t_end, job->resting_speed,
-	                       gravity,    v3_scale(gravity, 0.5f * job->h),
-	                       job->air,   job->sim->materials};
-}
-
-/* Start of a substep for particle i: its velocity takes gravity and damping (air, when on, has
- * been applied to the range already); then a pinned particle moves to its interpolated target,
- * a free one to its predicted position. v then holds the end-of-substep velocity; moving with
- * v - h g / 2, the mean velocity over the substep under constant gravity, makes free flight
- * exact (x0 + v0 t + g t^2 / 2) instead of off by g h t / 2. v keeps that value until the
- * velocity update: collisions read it as the velocity before the constraints. The contacts of
- * the last substep are forgotten; what rested on a plane collider in it is held by it in this
- * one (see surface_contact.c). */
-static inline void begin_particle(const particle_step *k, plait_particles *p, int i)
-{
-	const uint8_t cleared =
-	    (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_ON_PLANE);
-	uint8_t flags = p->flags[i];
-	p->flags[i] =
-	    (uint8_t)((flags & cleared) | ((flags & PLAIT_PARTICLE_ON_PLANE) ? PLAIT_PARTICLE_SUPPORTED : 0));
-	p->x_prev[i] = p->point[i].x;
-	if (p->point[i].w == 0.0f) {
-		p->point[i].x = v3_lerp(p->pin_start[i], p->pin_end[i], k->t_end);
-		return;
-	}
-	/* Without air, plait_integrate_velocities in the same pass: gravity and damping. */
-	if (!k->air) {
-		p->v[i] = plait_damp_velocity(v3_mul_add(p->v[i], k->h, k->gravity),
-		                              k->materials[p->material[i]].damp, k->h);
-	}
-	p->point[i].x = v3_mul_add(p->point[i].x, k->h, v3_sub(p->v[i], k->half_gravity_step));
-}
-
-/* End of a substep for particle i: v = (x - x_prev) / h is the mean velocity of the substep;
- * adding h g / 2 back gives the velocity at its end (the inverse of the prediction above).
- * Then restitution and stickiness of its collider contact, which compare it with the velocity
- * before. */
-static inline void end_particle(const particle_step *k, plait_particles *p, int i)
-{
-	vec3 mean = v3_scale(v3_sub(p->point[i].x, p->x_prev[i]), k->inverse_h);
-	if (p->point[i].w == 0.0f) {
-		p->v[i] = mean;
-		return;
-	}
-	vec3 v = v3_add(mean, k->half_gravity_step);
-	if (p->flags[i] & PLAIT_PARTICLE_CONTACT) {
-		v = plait_respond_to_collider_contact(p, i, p->v[i], v, k->resting_speed);
-	}
-	p->v[i] = v;
+	return (plait_particle_step){job->h,     1.0f / job->h,
+	                             job->t_end, job->resting_speed,
+	                             gravity,    v3_scale(gravity, 0.5f * job->h),
+	                             job->air,   job->sim->materials};
 }
 
 static void begin_substep_range(void *context, int begin, int end)
@@ -151,20 +96,20 @@ static void begin_substep_range(void *context, int begin, int end)
 	if (job->air) {
 		plait_integrate_velocities(job->sim, job->h, true, begin, end);
 	}
-	particle_step k = step_of(job);
+	plait_particle_step k = step_of(job);
 	plait_particles *p = &job->sim->particles;
 	for (int i = begin; i < end; ++i) {
-		begin_particle(&k, p, i);
+		plait_begin_particle(&k, p, i);
 	}
 }
 
 static void end_substep_range(void *context, int begin, int end)
 {
 	const particle_job *job = context;
-	particle_step k = step_of(job);
+	plait_particle_step k = step_of(job);
 	plait_particles *p = &job->sim->particles;
 	for (int i = begin; i < end; ++i) {
-		end_particle(&k, p, i);
+		plait_end_particle(&k, p, i);
 	}
 }
 
@@ -174,11 +119,17 @@ static void end_substep_range(void *context, int begin, int end)
 static void end_and_begin_range(void *context, int begin, int end)
 {
 	const particle_job *job = context;
-	particle_step k = step_of(job);
+	plait_particle_step k = step_of(job);
 	plait_particles *p = &job->sim->particles;
+#if PLAIT_X86_KERNELS
+	if (job->sim->simd != PLAIT_SIMD_SCALAR) {
+		plait_end_and_begin_avx2(&k, p, begin, end);
+		return;
+	}
+#endif
 	for (int i = begin; i < end; ++i) {
-		end_particle(&k, p, i);
-		begin_particle(&k, p, i);
+		plait_end_particle(&k, p, i);
+		plait_begin_particle(&k, p, i);
 	}
 }
 
@@ -245,6 +196,11 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 	float inverse_h_squared = 1.0f / (h * h);
 	bool air = plait_air_active(sim);
 	sim->substep_time = h;
+	/* Damping's factor per substep, once per material rather than once per particle. */
+	for (int m = 0; m < sim->material_count; ++m) {
+		float damp = sim->materials[m].damp;
+		sim->materials[m].damp_factor = damp > 0.0f ? expf(-damp * h) : 1.0f;
+	}
 	bool begun = false; /* the particles' part of this substep's start is done */
 	for (int s = 0; s < substeps; ++s) {
 		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;

@@ -1,0 +1,128 @@
+/* The end of one substep and the start of the next (particle_step.h) in AVX2, eight particles
+ * at a time. Compiled with -mavx2 (never with FMA contraction); only called when the processor
+ * has AVX2. Every lane does plait_end_particle then plait_begin_particle's operations in their
+ * order, so the bits are the portable loop's. The rare cases go back to those functions' parts
+ * lane by lane: a collider contact's restitution between the two halves, and a pinned
+ * particle's target after them. */
+#include "dynamics/particle_step.h"
+
+#if PLAIT_X86_KERNELS
+#include <immintrin.h>
+#include <string.h>
+
+#include "dynamics/points_avx2.h"
+
+/* Eight vec3 (24 floats from `from`) into a register per coordinate, and back. Lane k of the
+ * blends below holds coordinate k % 3 of vector k / 3 in register a (k < 8), b or c; the
+ * permutes put each coordinate's lanes in vector order. */
+static inline void load_vec3x8(const vec3 *from, __m256 *x, __m256 *y, __m256 *z)
+{
+	const float *f = &from->x;
+	__m256 a = _mm256_loadu_ps(f), b = _mm256_loadu_ps(f + 8), c = _mm256_loadu_ps(f + 16);
+	*x = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(a, b, 0x92), c, 0x24),
+	                              _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+	*y = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(a, b, 0x24), c, 0x49),
+	                              _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+	*z = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(a, b, 0x49), c, 0x92),
+	                              _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+}
+
+static inline void store_vec3x8(vec3 *to, __m256 x, __m256 y, __m256 z)
+{
+	__m256 xb = _mm256_permutevar8x32_ps(x, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+	__m256 yb = _mm256_permutevar8x32_ps(y, _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2));
+	__m256 zb = _mm256_permutevar8x32_ps(z, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+	float *f = &to->x;
+	_mm256_storeu_ps(f, _mm256_blend_ps(_mm256_blend_ps(xb, yb, 0x92), zb, 0x24));
+	_mm256_storeu_ps(f + 8, _mm256_blend_ps(_mm256_blend_ps(xb, yb, 0x24), zb, 0x49));
+	_mm256_storeu_ps(f + 16, _mm256_blend_ps(_mm256_blend_ps(xb, yb, 0x49), zb, 0x92));
+}
+
+void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
+{
+	const __m256 zero = _mm256_setzero_ps(), h = _mm256_set1_ps(k->h),
+	             inverse_h = _mm256_set1_ps(k->inverse_h);
+	const __m256 gx = _mm256_set1_ps(k->gravity.x), gy = _mm256_set1_ps(k->gravity.y),
+	             gz = _mm256_set1_ps(k->gravity.z);
+	const __m256 hx = _mm256_set1_ps(k->half_gravity_step.x), hy = _mm256_set1_ps(k->half_gravity_step.y),
+	             hz = _mm256_set1_ps(k->half_gravity_step.z);
+	/* Materials are read for their damping factor, as floats: its address in the first and the
+	 * stride in floats (the struct has int members, so its size is a multiple of 4). */
+	const float *damp_factor = &k->materials[0].damp_factor;
+	const __m256i material_stride = _mm256_set1_epi32((int)(sizeof(plait_material) / sizeof(float)));
+	const uint64_t contact_bits = 0x0101010101010101ull * PLAIT_PARTICLE_CONTACT;
+	const uint64_t kept_bits =
+	    0x0101010101010101ull *
+	    (uint8_t) ~(PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_ON_PLANE);
+	const uint64_t on_plane_bits = 0x0101010101010101ull * PLAIT_PARTICLE_ON_PLANE;
+	_Static_assert(PLAIT_PARTICLE_ON_PLANE == 2 * PLAIT_PARTICLE_SUPPORTED,
+	               "a particle on a plane is supported in the next substep: one shift right");
+	int i = begin;
+	for (; i + 8 <= end; i += 8) {
+		int index[8] = {i, i + 1, i + 2, i + 3, i + 4, i + 5, i + 6, i + 7};
+		__m256 x, y, z, w, px, py, pz;
+		gather8(p->point, index, &x, &y, &z, &w);
+		load_vec3x8(p->x_prev + i, &px, &py, &pz);
+		__m256 pinned = _mm256_cmp_ps(w, zero, _CMP_EQ_OQ);
+
+		/* plait_end_particle: the mean velocity of the substep, and for a free particle the
+		 * velocity at its end. */
+		__m256 mx = _mm256_mul_ps(_mm256_sub_ps(x, px), inverse_h);
+		__m256 my = _mm256_mul_ps(_mm256_sub_ps(y, py), inverse_h);
+		__m256 mz = _mm256_mul_ps(_mm256_sub_ps(z, pz), inverse_h);
+		__m256 vx = _mm256_add_ps(mx, hx), vy = _mm256_add_ps(my, hy), vz = _mm256_add_ps(mz, hz);
+		uint64_t flags;
+		memcpy(&flags, p->flags + i, sizeof flags);
+		if (flags & contact_bits) {
+			/* Restitution and stickiness, lane by lane, against the velocity before (still in
+			 * p->v). */
+			_Alignas(32) float lx[8], ly[8], lz[8];
+			_mm256_store_ps(lx, vx);
+			_mm256_store_ps(ly, vy);
+			_mm256_store_ps(lz, vz);
+			int pinned_lanes = _mm256_movemask_ps(pinned);
+			for (int lane = 0; lane < 8; ++lane) {
+				if ((p->flags[i + lane] & PLAIT_PARTICLE_CONTACT) && !(pinned_lanes & (1 << lane))) {
+					vec3 v = plait_respond_to_collider_contact(
+					    p, i + lane, p->v[i + lane], v3(lx[lane], ly[lane], lz[lane]), k->resting_speed);
+					lx[lane] = v.x;
+					ly[lane] = v.y;
+					lz[lane] = v.z;
+				}
+			}
+			vx = _mm256_load_ps(lx);
+			vy = _mm256_load_ps(ly);
+			vz = _mm256_load_ps(lz);
+		}
+
+		/* plait_begin_particle: the contact flags, the start of the new substep, then gravity,
+		 * damping and the predicted position of a free particle. */
+		flags = (flags & kept_bits) | ((flags & on_plane_bits) >> 1);
+		memcpy(p->flags + i, &flags, sizeof flags);
+		store_vec3x8(p->x_prev + i, x, y, z);
+		__m256i material = _mm256_loadu_si256((const __m256i *)(p->material + i));
+		__m256 factor = _mm256_i32gather_ps(damp_factor, _mm256_mullo_epi32(material, material_stride), 4);
+		vx = _mm256_mul_ps(_mm256_add_ps(vx, _mm256_mul_ps(h, gx)), factor);
+		vy = _mm256_mul_ps(_mm256_add_ps(vy, _mm256_mul_ps(h, gy)), factor);
+		vz = _mm256_mul_ps(_mm256_add_ps(vz, _mm256_mul_ps(h, gz)), factor);
+		x = _mm256_add_ps(x, _mm256_mul_ps(h, _mm256_sub_ps(vx, hx)));
+		y = _mm256_add_ps(y, _mm256_mul_ps(h, _mm256_sub_ps(vy, hy)));
+		z = _mm256_add_ps(z, _mm256_mul_ps(h, _mm256_sub_ps(vz, hz)));
+		/* A pinned particle keeps the mean velocity and goes to its target (below). */
+		store_vec3x8(p->v + i, _mm256_blendv_ps(vx, mx, pinned), _mm256_blendv_ps(vy, my, pinned),
+		             _mm256_blendv_ps(vz, mz, pinned));
+		scatter8(p->point, index, 8, x, y, z, w);
+		int pinned_lanes = _mm256_movemask_ps(pinned);
+		while (pinned_lanes != 0) {
+			int lane = __builtin_ctz((unsigned)pinned_lanes);
+			pinned_lanes &= pinned_lanes - 1;
+			p->point[i + lane].x = v3_lerp(p->pin_start[i + lane], p->pin_end[i + lane], k->t_end);
+		}
+	}
+	for (; i < end; ++i) {
+		plait_end_particle(k, p, i);
+		plait_begin_particle(k, p, i);
+	}
+	_mm256_zeroupper();
+}
+#endif
