@@ -54,8 +54,10 @@ void plait_solve_distance(plait_distance_block *block, plait_particles *particle
                           plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel);
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
                       plait_bend_kernel *kernel, plait_parallel *parallel);
-/* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. */
-void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel);
+/* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. With
+ * simd above scalar, rows of two held to pins run in AVX2 (tether_kernel.h), to the same bits. */
+void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_simd simd,
+                         plait_parallel *parallel);
 /* For the frame to come: whether every tether's anchor is pinned (pins change between frames
  * only), and the solver's regrouping of the tethers, derived again if they changed. Out of
  * memory only costs speed: the tethers are then solved as they are stored. */

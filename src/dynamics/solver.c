@@ -155,7 +155,7 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		sim->constraint_solves += sim->bend.count + sweeps * sim->bend_distance.count + sim->rod_bend.count;
 		break;
 	case PLAIT_KIND_TETHER:
-		plait_solve_tethers(&sim->tether, &sim->particles, &sim->parallel);
+		plait_solve_tethers(&sim->tether, &sim->particles, sim->simd, &sim->parallel);
 		sim->constraint_solves += sim->tether.count;
 		break;
 	case PLAIT_KIND_COLLISION: {

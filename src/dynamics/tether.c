@@ -7,6 +7,7 @@
 #include "dynamics/constraints.h"
 
 #include "core/dvec3.h"
+#include "dynamics/tether_kernel.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -459,6 +460,7 @@ typedef struct tether_job {
 	plait_tether_block *block;
 	plait_point *points;
 	bool fixed_anchors;
+	bool avx2; /* lanes by plait_tether_rows_avx2 */
 } tether_job;
 
 /* Rows [begin, end) of the lanes; each writes its own particle only. */
@@ -477,6 +479,22 @@ static void lane_range(void *context, int begin, int end)
 		const tether_run *run = &lanes->runs[r];
 		vec3 a0 = points[run->anchor[0]].x, a1 = points[run->anchor[1]].x;
 		int run_begin = run->begin > begin ? run->begin : begin, run_end = run->end < end ? run->end : end;
+#if PLAIT_X86_KERNELS
+		if (job->avx2) {
+			for (int b = run_begin; b < run_end; b += LANE_BATCH) {
+				int count = run_end - b < LANE_BATCH ? run_end - b : LANE_BATCH;
+				int unfound[LANE_BATCH];
+				int missing = plait_tether_rows_avx2(points, lanes->particle + b, lanes->length[0] + b,
+				                                     lanes->length[1] + b, lanes->stiffness + b, a0, a1,
+				                                     count, (float)INSIDE_TOLERANCE, unfound);
+				for (int m = 0; m < missing; ++m) {
+					int first = lanes->first[b + unfound[m]];
+					project_row_exactly(block, points, first, first + 2);
+				}
+			}
+			continue;
+		}
+#endif
 		for (int b = run_begin; b < run_end; b += LANE_BATCH) {
 			int count = run_end - b < LANE_BATCH ? run_end - b : LANE_BATCH;
 			const int *particle = lanes->particle + b;
@@ -590,24 +608,25 @@ void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles 
 	}
 }
 
-void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_parallel *parallel)
+void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_simd simd,
+                         plait_parallel *parallel)
 {
 	/* Tethers are anchored at pins: then each particle's tethers write that particle only and
 	 * particles can run side by side. An anchor set free since (its pin released) is written
 	 * too, and then they run in order, each tether on its own. */
 	if (!block->fixed_anchors) {
-		tether_job job = {block, particles->point, false};
+		tether_job job = {block, particles->point, false, false};
 		tether_range(&job, 0, block->count);
 		return;
 	}
 	if (block->lanes == NULL) {
-		tether_job job = {block, particles->point, true};
+		tether_job job = {block, particles->point, true, false};
 		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
 		return;
 	}
 	plait_tether_lanes *lanes = block->lanes;
-	tether_job rows = {block, particles->point, true};
+	tether_job rows = {block, particles->point, true, simd != PLAIT_SIMD_SCALAR};
 	plait_parallel_for(parallel, lane_range, &rows, 0, lanes->count, TETHER_GRAIN);
-	tether_job others = {&lanes->others, particles->point, true};
+	tether_job others = {&lanes->others, particles->point, true, false};
 	plait_parallel_for(parallel, tether_range, &others, 0, lanes->others.count, TETHER_GRAIN);
 }
