@@ -8,6 +8,7 @@
 #include "collision/moving_triangle.h"
 #include "collision/particle_hash.h"
 #include "collision/static_sweep.h"
+#include "dynamics/contact_kernel.h"
 #include "dynamics/mesh_contact.h"
 
 static plait_transform lerp_transform(plait_transform a, plait_transform b, float t)
@@ -654,9 +655,17 @@ static void collide_collider_range(void *context, int begin, int end)
 	int batch_count = 0;
 	if (job->bounded && job->indices == NULL) {
 		int near[CULL_CHUNK];
+		plait_collider_bounds bounds = {job->world_lower, job->world_upper, job->ball_centre,
+		                                job->ball_radius};
 		for (int chunk = begin; chunk < end; chunk += CULL_CHUNK) {
-			int count =
-			    cull_particles(job, p, chunk, end - chunk < CULL_CHUNK ? end - chunk : CULL_CHUNK, near);
+			int size = end - chunk < CULL_CHUNK ? end - chunk : CULL_CHUNK, count = 0, whole = 0;
+#if PLAIT_X86_KERNELS
+			if (job->sim->simd != PLAIT_SIMD_SCALAR) {
+				whole = size & ~7;
+				count = plait_cull_particles_avx2(p, &bounds, chunk, whole, near);
+			}
+#endif
+			count += cull_particles(job, p, chunk + whole, size - whole, near + count);
 			for (int k = 0; k < count; ++k) {
 				contacts += collide_particle(job, near[k], batch, &batch_count);
 			}
