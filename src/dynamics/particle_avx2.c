@@ -1,9 +1,9 @@
 /* The end of one substep and the start of the next (particle_step.h) in AVX2, eight particles
- * at a time. Compiled with -mavx2 (never with FMA contraction); only called when the processor
- * has AVX2. Every lane does plait_end_particle then plait_begin_particle's operations in their
- * order, so the bits are the portable loop's. The rare cases go back to those functions' parts
- * lane by lane: a collider contact's restitution between the two halves, and a pinned
- * particle's target after them. */
+ * at a time, each alone or both in one pass. Compiled with -mavx2 (never with FMA contraction); only called
+ * when the processor has AVX2. Every lane does plait_end_particle then plait_begin_particle's operations in
+ * their order, so the bits are the portable loop's. The rare cases go back to those functions' parts lane by
+ * lane: a collider contact's restitution between the two halves, and a pinned particle's target after them.
+ */
 #include "dynamics/particle_step.h"
 
 #if PLAIT_X86_KERNELS
@@ -38,7 +38,10 @@ static inline void store_vec3x8(vec3 *to, __m256 x, __m256 y, __m256 z)
 	_mm256_storeu_ps(f + 16, _mm256_blend_ps(_mm256_blend_ps(xb, yb, 0x49), zb, 0x92));
 }
 
-void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
+/* The end of a substep (with `ending`) and the start of the next (with `beginning`), one or
+ * both; the three combinations are separate copies. */
+static inline __attribute__((always_inline)) void step_range(const plait_particle_step *k, plait_particles *p,
+                                                             int begin, int end, bool ending, bool beginning)
 {
 	const __m256 zero = _mm256_setzero_ps(), h = _mm256_set1_ps(k->h),
 	             inverse_h = _mm256_set1_ps(k->inverse_h);
@@ -60,20 +63,27 @@ void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, 
 	int i = begin;
 	for (; i + 8 <= end; i += 8) {
 		int index[8] = {i, i + 1, i + 2, i + 3, i + 4, i + 5, i + 6, i + 7};
-		__m256 x, y, z, w, px, py, pz;
+		__m256 x, y, z, w;
 		gather8(p->point, index, &x, &y, &z, &w);
-		load_vec3x8(p->x_prev + i, &px, &py, &pz);
 		__m256 pinned = _mm256_cmp_ps(w, zero, _CMP_EQ_OQ);
-
-		/* plait_end_particle: the mean velocity of the substep, and for a free particle the
-		 * velocity at its end. */
-		__m256 mx = _mm256_mul_ps(_mm256_sub_ps(x, px), inverse_h);
-		__m256 my = _mm256_mul_ps(_mm256_sub_ps(y, py), inverse_h);
-		__m256 mz = _mm256_mul_ps(_mm256_sub_ps(z, pz), inverse_h);
-		__m256 vx = _mm256_add_ps(mx, hx), vy = _mm256_add_ps(my, hy), vz = _mm256_add_ps(mz, hz);
 		uint64_t flags;
 		memcpy(&flags, p->flags + i, sizeof flags);
-		if (flags & contact_bits) {
+		__m256 vx, vy, vz, mx = zero, my = zero, mz = zero;
+		if (!ending) {
+			load_vec3x8(p->v + i, &vx, &vy, &vz);
+		} else {
+			/* plait_end_particle: the mean velocity of the substep, and for a free particle
+			 * the velocity at its end. */
+			__m256 px, py, pz;
+			load_vec3x8(p->x_prev + i, &px, &py, &pz);
+			mx = _mm256_mul_ps(_mm256_sub_ps(x, px), inverse_h);
+			my = _mm256_mul_ps(_mm256_sub_ps(y, py), inverse_h);
+			mz = _mm256_mul_ps(_mm256_sub_ps(z, pz), inverse_h);
+			vx = _mm256_add_ps(mx, hx);
+			vy = _mm256_add_ps(my, hy);
+			vz = _mm256_add_ps(mz, hz);
+		}
+		if (ending && (flags & contact_bits)) {
 			/* Restitution and stickiness, lane by lane, against the velocity before (still in
 			 * p->v). */
 			_Alignas(32) float lx[8], ly[8], lz[8];
@@ -95,6 +105,12 @@ void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, 
 			vz = _mm256_load_ps(lz);
 		}
 
+		if (!beginning) {
+			/* The velocity at the substep's end; a pinned particle's is its mean one. */
+			store_vec3x8(p->v + i, _mm256_blendv_ps(vx, mx, pinned), _mm256_blendv_ps(vy, my, pinned),
+			             _mm256_blendv_ps(vz, mz, pinned));
+			continue;
+		}
 		/* plait_begin_particle: the contact flags, the start of the new substep, then gravity,
 		 * damping and the predicted position of a free particle. */
 		flags = (flags & kept_bits) | ((flags & on_plane_bits) >> 1);
@@ -108,9 +124,20 @@ void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, 
 		x = _mm256_add_ps(x, _mm256_mul_ps(h, _mm256_sub_ps(vx, hx)));
 		y = _mm256_add_ps(y, _mm256_mul_ps(h, _mm256_sub_ps(vy, hy)));
 		z = _mm256_add_ps(z, _mm256_mul_ps(h, _mm256_sub_ps(vz, hz)));
-		/* A pinned particle keeps the mean velocity and goes to its target (below). */
-		store_vec3x8(p->v + i, _mm256_blendv_ps(vx, mx, pinned), _mm256_blendv_ps(vy, my, pinned),
-		             _mm256_blendv_ps(vz, mz, pinned));
+		/* A pinned particle keeps its velocity (the mean one, when the substep ended here) and
+		 * goes to its target (below). */
+		if (ending) {
+			vx = _mm256_blendv_ps(vx, mx, pinned);
+			vy = _mm256_blendv_ps(vy, my, pinned);
+			vz = _mm256_blendv_ps(vz, mz, pinned);
+		} else {
+			__m256 ox, oy, oz;
+			load_vec3x8(p->v + i, &ox, &oy, &oz);
+			vx = _mm256_blendv_ps(vx, ox, pinned);
+			vy = _mm256_blendv_ps(vy, oy, pinned);
+			vz = _mm256_blendv_ps(vz, oz, pinned);
+		}
+		store_vec3x8(p->v + i, vx, vy, vz);
 		scatter8(p->point, index, 8, x, y, z, w);
 		int pinned_lanes = _mm256_movemask_ps(pinned);
 		while (pinned_lanes != 0) {
@@ -120,9 +147,28 @@ void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, 
 		}
 	}
 	for (; i < end; ++i) {
-		plait_end_particle(k, p, i);
-		plait_begin_particle(k, p, i);
+		if (ending) {
+			plait_end_particle(k, p, i);
+		}
+		if (beginning) {
+			plait_begin_particle(k, p, i);
+		}
 	}
 	_mm256_zeroupper();
+}
+
+void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
+{
+	step_range(k, p, begin, end, true, true);
+}
+
+void plait_end_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
+{
+	step_range(k, p, begin, end, true, false);
+}
+
+void plait_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
+{
+	step_range(k, p, begin, end, false, true);
 }
 #endif

@@ -67,5 +67,8 @@ static inline void plait_end_particle(const plait_particle_step *k, plait_partic
  * plait_end_particle then plait_begin_particle for each, without air (k->air false), eight at
  * a time. Only call when the processor runs AVX2 (plait_simd_supported). */
 void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end);
+/* The end of a substep alone, and the start of one alone (without air), likewise. */
+void plait_end_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end);
+void plait_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end);
 
 #endif

@@ -98,6 +98,12 @@ static void begin_substep_range(void *context, int begin, int end)
 	}
 	plait_particle_step k = step_of(job);
 	plait_particles *p = &job->sim->particles;
+#if PLAIT_X86_KERNELS
+	if (job->sim->simd != PLAIT_SIMD_SCALAR && !job->air) {
+		plait_begin_avx2(&k, p, begin, end);
+		return;
+	}
+#endif
 	for (int i = begin; i < end; ++i) {
 		plait_begin_particle(&k, p, i);
 	}
@@ -108,6 +114,12 @@ static void end_substep_range(void *context, int begin, int end)
 	const particle_job *job = context;
 	plait_particle_step k = step_of(job);
 	plait_particles *p = &job->sim->particles;
+#if PLAIT_X86_KERNELS
+	if (job->sim->simd != PLAIT_SIMD_SCALAR) {
+		plait_end_avx2(&k, p, begin, end);
+		return;
+	}
+#endif
 	for (int i = begin; i < end; ++i) {
 		plait_end_particle(&k, p, i);
 	}
