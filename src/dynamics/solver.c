@@ -181,15 +181,29 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 	}
 }
 
+/* Whether any of count floats is an infinity or a NaN (all exponent bits set), in a loop
+ * without branches that the compiler vectorises: it runs over every position and velocity once
+ * a frame. */
+static bool any_nonfinite(const float *values, size_t count)
+{
+	uint32_t bad = 0;
+	for (size_t k = 0; k < count; ++k) {
+		uint32_t bits;
+		memcpy(&bits, &values[k], sizeof bits);
+		bad |= (uint32_t)((bits & 0x7f800000u) == 0x7f800000u);
+	}
+	return bad != 0;
+}
+
 static bool state_is_finite(const plait_sim *sim)
 {
 	const plait_particles *p = &sim->particles;
-	for (int i = 0; i < p->count; ++i) {
-		if (!v3_is_finite(p->point[i].x) || !v3_is_finite(p->v[i])) {
-			return false;
-		}
+	if (p->count == 0) {
+		return true;
 	}
-	return true;
+	/* Positions with their inverse masses (finite too), then velocities. */
+	return !any_nonfinite(&p->point[0].x.x, 4 * (size_t)p->count) &&
+	       !any_nonfinite(&p->v[0].x, 3 * (size_t)p->count);
 }
 
 static void restore_frame_start(plait_particles *p)
