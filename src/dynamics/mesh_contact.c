@@ -1134,7 +1134,7 @@ static void visit_elements(int a, int b, void *context)
 #define CLOTH_EDGE_SLACK 1.1f
 /* Reaches are looked for up to this many times the longest cloth edge at the build (beyond
  * that, a stretched cloth meets every corner and edge again). */
-#define SMOOTH_RANGE 3.0f
+#define SMOOTH_RANGE 2.0f
 /* Radians: a face this steep against a feature's reference normal ends its smooth reach. */
 #define SMOOTH_STEEPEST 1.0f
 
@@ -1224,12 +1224,15 @@ static void sample_face(int triangle, void *context)
 
 /* The longest cloth edge D for which F(D) < budget (M above), for the feature of q with its
  * faces within q->range sampled; at most q->range - budget (farther faces are not known). */
-static float smooth_reach(feature_query *q, float budget)
+static float reach_within(feature_query *q, float budget, float range)
 {
 	vec3 lower = v3_min(q->a, q->b), upper = v3_max(q->a, q->b);
-	vec3 grow = v3(q->range, q->range, q->range);
+	vec3 grow = v3(range, range, range);
 	q->count = 0;
+	float full = q->range;
+	q->range = range;
 	plait_mesh_shape_visit(q->shape, v3_sub(lower, grow), v3_add(upper, grow), true, sample_face, q);
+	q->range = full;
 	if (q->failed) {
 		return -1.0f;
 	}
@@ -1245,7 +1248,7 @@ static float smooth_reach(feature_query *q, float budget)
 		if (steepest >= SMOOTH_STEEPEST) {
 			return t;
 		}
-		float next = k < q->count ? q->samples[k].distance - budget : q->range - budget;
+		float next = k < q->count ? q->samples[k].distance - budget : range - budget;
 		float slope = tanf(steepest);
 		if (fall + slope * (next - t) >= budget) {
 			return t + (budget - fall) / slope;
@@ -1256,6 +1259,32 @@ static float smooth_reach(feature_query *q, float budget)
 		fall += slope * (next - t);
 		t = next;
 	}
+}
+
+/* The same over q->range, sampled in widening rounds: most reaches end well inside it. */
+static float smooth_reach(feature_query *q, float budget)
+{
+	float range = budget + 0.25f * (q->range - budget);
+	for (;;) {
+		float reach = reach_within(q, budget, range);
+		if (reach < 0.999f * (range - budget) || range >= q->range) {
+			return reach;
+		}
+		range = plait_minf(q->range, budget + 2.0f * (range - budget));
+	}
+}
+
+/* How far a feature's faces need sampling: F(D) >= D tan A(0), and A(0) is at least the angle
+ * of its own faces against its normal (cosine `own`), so its reach stays under budget / tan of
+ * that. (Sampling less only lowers reaches.) */
+static float capped_range(float range, float budget, float own)
+{
+	float angle = acosf(plait_maxf(-1.0f, plait_minf(1.0f, own)));
+	if (angle >= SMOOTH_STEEPEST) {
+		return budget; /* reach 0 */
+	}
+	float slope = tanf(angle);
+	return slope > 0.0f ? plait_minf(range, budget + 1.01f * budget / slope) : range;
 }
 
 /* The mean of unit normals, made unit; zero when they cancel out (no side to stand on). */
@@ -1279,9 +1308,10 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 	float *vertex_reach = plait_alloc(a, sizeof(float) * (size_t)nv);
 	vec3 *vertex_normal = plait_alloc_zero(a, (size_t)nv, sizeof(vec3));
 	int *star = plait_alloc_zero(a, (size_t)nv, sizeof(int));
+	float *star_cos = plait_alloc(a, sizeof(float) * (size_t)nv); /* of the steepest face of its star */
 	feature_query q = {.allocator = a, .shape = shape, .open = open, .corner = true, .range = range};
 	bool ok = edges != NULL && edge_of != NULL && open != NULL && edge_reach != NULL &&
-	          vertex_reach != NULL && vertex_normal != NULL && star != NULL;
+	          vertex_reach != NULL && vertex_normal != NULL && star != NULL && star_cos != NULL;
 	if (ok) {
 		for (int t = 0; t < nt; ++t) {
 			for (int k = 0; k < 3; ++k) {
@@ -1306,6 +1336,14 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 		}
 		for (int v = 0; v < nv; ++v) {
 			vertex_reach[v] = range - budget;
+			star_cos[v] = 1.0f;
+		}
+		for (int t = 0; t < nt; ++t) {
+			for (int k = 0; k < 3; ++k) {
+				int v = shape->triangles[t][k];
+				vec3 n0 = reference_normal(vertex_normal[v], star[v]);
+				star_cos[v] = plait_minf(star_cos[v], v3_dot(n0, shape->normals[t]));
+			}
 		}
 		/* Edges first: a corner is kept whenever an edge of it is. */
 		for (int start = 0; start < 3 * nt && !q.failed;) {
@@ -1322,6 +1360,7 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 				q.normal = reference_normal(
 				    v3_add(shape->normals[edges[start].element], shape->normals[edges[start + 1].element]),
 				    2);
+				q.range = capped_range(range, budget, v3_dot(q.normal, shape->normals[edges[start].element]));
 				reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, budget) : -1.0f;
 			}
 			edge_reach[start] = reach;
@@ -1336,6 +1375,7 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 			q.a = q.b = shape->positions[v];
 			q.corner = true;
 			q.normal = reference_normal(vertex_normal[v], star[v]);
+			q.range = capped_range(range, budget, star_cos[v]);
 			float reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, budget) : -1.0f;
 			vertex_reach[v] = plait_minf(vertex_reach[v], reach);
 		}
@@ -1361,6 +1401,7 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 	plait_free(a, vertex_reach);
 	plait_free(a, vertex_normal);
 	plait_free(a, star);
+	plait_free(a, star_cos);
 	return ok;
 }
 
