@@ -8,7 +8,10 @@
  *
  *   scene=pile n=64 threads=1 ms=12.3 collision=0.41 worst_crossings=0 crossing_frames=0 ...
  *
- * (worst_in_round: the most cloth triangles reaching into a sphere or capsule collider.)
+ * (worst_in_round: the most cloth triangles reaching into a sphere or capsule collider;
+ * collider_features: kept/met, the corners and edges of mesh and box colliders that the last
+ * listing of each frame met in element pairs with cloth and kept, of all it met there (the
+ * others are smooth at the scale of the cloth's triangles), mean over the frames.)
  *
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
  *                      [--verbose] (frames with crossings or vertices inside colliders)
@@ -20,6 +23,8 @@
 #include <time.h>
 
 #include "collide_scenes.h"
+#include "dynamics/mesh_contact.h"
+#include "world/world.h"
 
 #ifdef PLAIT_BENCH_HAVE_POOL
 #include "thread_pool.h"
@@ -42,6 +47,7 @@ typedef struct run_result {
 	double ms, collision_ms;
 	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe, order_violations;
 	int frames;
+	double features_kept, features_left_out; /* collider corners and edges met, summed over frames */
 	bool failed;
 } run_result;
 
@@ -78,6 +84,10 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 		r.collision_ms += stats.collision_ms;
 		r.ccd_hits += stats.ccd_hits;
 		r.failsafe += stats.failsafe;
+		int kept, left_out;
+		plait_mesh_contacts_collider_features(&scene.world.world->sim, &kept, &left_out);
+		r.features_kept += kept;
+		r.features_left_out += left_out;
 		if (check) {
 			plait_intersection_report report;
 			plait_world_check_intersections(scene.world, &report, NULL);
@@ -155,10 +165,12 @@ int main(int argc, char **argv)
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
 		printf(
 		    "scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d crossing_frames=%d "
-		    "worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d failsafe=%d%s\n",
+		    "worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d failsafe=%d "
+		    "collider_features=%.0f/%.0f%s\n",
 		    collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
 		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.worst_in_round,
-		    last.order_violations, last.ccd_hits, last.failsafe, last.failed ? " FAILED" : "");
+		    last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
+		    (last.features_kept + last.features_left_out) / last.frames, last.failed ? " FAILED" : "");
 		fflush(stdout);
 		failures += last.failed;
 		free(ms);

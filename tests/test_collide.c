@@ -6,9 +6,11 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "collide_scenes.h"
 #include "test_support.h"
+#include "dynamics/mesh_contact.h"
 #include "world/world.h"
 
 typedef struct scene_totals {
@@ -363,6 +365,129 @@ Test(collide, a_round_collider_does_not_reach_between_a_sheets_vertices)
 	int vertices = coarse_sheet_over_a_small_sphere(PLAIT_COLLIDE_VERTEX);
 	cr_assert_eq(full, 0, "up to %d triangles reach into the sphere", full);
 	cr_assert_gt(vertices, 0, "the sphere should reach between the vertices of a vertex-only sheet");
+}
+
+/* A sphere mesh of `bands` latitude bands and as many longitudes (fans at the poles), 0.5 m
+ * in radius at the origin: smooth to a sheet's small triangles, a polyhedron to large ones. */
+typedef struct sphere_mesh {
+	plait_vec3 *x;
+	int *sizes, *indices;
+	int vertex_count, face_count;
+} sphere_mesh;
+
+static sphere_mesh make_sphere_mesh(int bands)
+{
+	const float r = 0.5f, pi = 3.14159265f;
+	sphere_mesh m = {0};
+	m.vertex_count = 2 + bands * (bands - 1);
+	m.x = malloc(sizeof *m.x * (size_t)m.vertex_count);
+	m.sizes = malloc(sizeof(int) * (size_t)(bands * bands));
+	m.indices = malloc(sizeof(int) * 4 * (size_t)(bands * bands));
+	m.x[0] = (plait_vec3){0.0f, r, 0.0f};
+	m.x[1] = (plait_vec3){0.0f, -r, 0.0f};
+	for (int j = 1; j < bands; ++j) {
+		float polar = pi * (float)j / (float)bands;
+		for (int i = 0; i < bands; ++i) {
+			float a = 2.0f * pi * (float)i / (float)bands;
+			m.x[2 + (j - 1) * bands + i] =
+			    (plait_vec3){r * sinf(polar) * cosf(a), r * cosf(polar), r * sinf(polar) * sinf(a)};
+		}
+	}
+	int at = 0;
+	for (int i = 0; i < bands; ++i) {
+		int next = (i + 1) % bands, last = 2 + (bands - 2) * bands;
+		int top[3] = {0, 2 + next, 2 + i}, bottom[3] = {1, last + i, last + next};
+		m.sizes[m.face_count++] = 3;
+		memcpy(m.indices + at, top, sizeof top);
+		at += 3;
+		for (int j = 1; j + 1 < bands; ++j) {
+			int a = 2 + (j - 1) * bands;
+			int quad[4] = {a + i, a + next, a + bands + next, a + bands + i};
+			m.sizes[m.face_count++] = 4;
+			memcpy(m.indices + at, quad, sizeof quad);
+			at += 4;
+		}
+		m.sizes[m.face_count++] = 3;
+		memcpy(m.indices + at, bottom, sizeof bottom);
+		at += 3;
+	}
+	return m;
+}
+
+typedef struct sphere_mesh_run {
+	int kept, left_out; /* the most collider corners and edges a frame's last listing kept, left out */
+} sphere_mesh_run;
+
+/* A sheet of n x n quads, `size` across and `thickness` thick, dropped from 0.2 m above onto a
+ * sphere mesh of 48 bands (edges turning by 7.5 degrees) for 60 frames: no frame may show a
+ * crossing or a vertex inside. */
+static sphere_mesh_run drop_sheet_on_sphere_mesh(int n, float size, float thickness, bool deforming)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	plait_error error;
+	sphere_mesh ball = make_sphere_mesh(48);
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_MESH;
+	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
+	sphere.surface.thickness = 0.0f;
+	sphere.deforming = deforming;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
+	test_grid grid = test_grid_make(n, n, size, size);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].y = 0.7f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = thickness;
+	def.self_collide = true; /* the checker counts a cloth crossing itself too */
+	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, &error)), "%s", error.message);
+	test_grid_free(&grid);
+	sphere_mesh_run run = {0};
+	for (int frame = 1; frame <= 60; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_intersection_report report;
+		cr_assert_eq(plait_world_check_intersections(world, &report, &error), PLAIT_OK);
+		cr_assert_eq(report.triangle_pairs, 0, "frame %d: %d crossing triangle pairs", frame,
+		             report.triangle_pairs);
+		cr_assert_eq(report.inside_colliders, 0, "frame %d", frame);
+		int kept, left_out;
+		plait_mesh_contacts_collider_features(&world.world->sim, &kept, &left_out);
+		run.kept = kept > run.kept ? kept : run.kept;
+		run.left_out = left_out > run.left_out ? left_out : run.left_out;
+	}
+	plait_destroy_world(world);
+	free(ball.x);
+	free(ball.sizes);
+	free(ball.indices);
+	return run;
+}
+
+/* Quads of 0.5 m, 5 cm thick, over a sphere of 0.5 m: each edge of the sphere mesh turns by
+ * less than the sheet's thickness over a quad's diagonal (0.71 m x tan 3.75 degrees = 4.6 cm),
+ * but over that span the sphere falls away by far more (a triangle of it spans 16 cm of
+ * sagitta): its corners and edges must meet the sheet, or they reach between its vertices. A
+ * filter by each edge's angle alone would leave them all out. */
+Test(collide, a_sphere_mesh_keeps_its_corners_and_edges_against_a_sheets_large_triangles)
+{
+	sphere_mesh_run run = drop_sheet_on_sphere_mesh(4, 2.0f, 0.05f, false);
+	cr_assert_gt(run.kept, 0);
+	cr_assert_eq(run.left_out, 0, "%d corners and edges left out under 0.5 m quads", run.left_out);
+}
+
+/* Quads of 2.5 cm over the same sphere: at that scale it is smooth, and vertices against its
+ * faces keep the sheet out; its corners and edges stay out of mesh contacts, but not those of
+ * the same sphere deforming (its angles could change from frame to frame). */
+Test(collide, a_sphere_mesh_leaves_its_smooth_corners_and_edges_to_a_sheets_vertices)
+{
+	sphere_mesh_run rigid = drop_sheet_on_sphere_mesh(24, 0.6f, 0.01f, false);
+	cr_assert_gt(rigid.left_out, 0);
+	cr_assert_lt(rigid.kept, rigid.left_out / 4, "%d corners and edges kept, %d left out", rigid.kept,
+	             rigid.left_out);
+	sphere_mesh_run deforming = drop_sheet_on_sphere_mesh(24, 0.6f, 0.01f, true);
+	cr_assert_gt(deforming.kept, 0);
+	cr_assert_eq(deforming.left_out, 0);
 }
 
 Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)

@@ -38,7 +38,17 @@ typedef struct collision_object {
 	int material;
 	bool self;
 	plait_element_tree tree;
+	int features; /* a collider's: index of its first element's collider_features, or -1 */
 } collision_object;
+
+/* A rigid mesh collider's corners and edges (plait_collider.first). Each element's own vertices
+ * and edges as built, and for each the longest cloth edge below which it is left out of mesh
+ * contacts (smooth_reach): a corner or edge that smooth cannot reach between the vertices of so
+ * short a triangle held out of the collider by the collider pass (contact.c). */
+typedef struct collider_features {
+	uint8_t vertices, edges; /* as built (element.own_vertices, own_edges) */
+	float reach[6];          /* vertex k: reach[k]; edge k: reach[3 + k]; scene units */
+} collider_features;
 
 /* An element's box, centroid and normal at the gather, for its cheap rejections. */
 typedef struct element_shape {
@@ -68,6 +78,14 @@ typedef struct plait_mesh_contacts {
 	vec3 *lower, *upper;   /* element boxes */
 	int object_count;
 	collision_object *objects;
+	/* Colliders' corners and edges left out where smooth (see build_collider_features): per
+	 * filtered collider element its features; per element of a cloth or curve that meets them
+	 * its edge-connected neighbours (-1: none), its longest edge's bound while the list serves,
+	 * and the D its element pairs with colliders are decided with. */
+	collider_features *features;
+	int (*neighbours)[3];
+	float *cloth_bound, *cloth_bound_scratch, *pair_reach;
+	int features_kept, features_left_out; /* at the last listing, over its element pairs */
 	/* Neighbours in the start shape. Within a self-colliding object, primitives closer than
 	 * their self-collision distance at the start (seed 000 §4.5) never push each other: that is
 	 * left to the object's own constraints. They may still not pass through each other: they
@@ -138,6 +156,14 @@ static void free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
 		plait_element_tree_destroy(&mc->objects[k].tree, a);
 	}
 	plait_free(a, mc->objects);
+	plait_free(a, mc->features);
+	plait_free(a, mc->neighbours);
+	plait_free(a, mc->cloth_bound);
+	plait_free(a, mc->cloth_bound_scratch);
+	plait_free(a, mc->pair_reach);
+	mc->features = NULL;
+	mc->neighbours = NULL;
+	mc->cloth_bound = mc->cloth_bound_scratch = mc->pair_reach = NULL;
 	plait_free(a, mc->shift);
 	plait_free(a, mc->allowance);
 	plait_free(a, mc->object_counts);
@@ -164,6 +190,8 @@ static bool material_collides(const plait_sim *sim, int material)
 }
 
 static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc);
+static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, const edge_key *edges,
+                                    int edge_count);
 
 static bool excluded(const plait_mesh_contacts *mc, int a, int b)
 {
@@ -243,7 +271,7 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[surface->material];
 			mc->objects[mc->object_count++] = (collision_object){
-			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}};
+			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1};
 			for (int t = 0; t < surface->shape->triangle_count; ++t, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 3;
@@ -270,7 +298,7 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[chain->material];
 			mc->objects[mc->object_count++] =
-			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}};
+			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}, -1};
 			for (int k = 0; k + 1 < chain->count; ++k, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 2;
@@ -287,7 +315,8 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				collision_object *last = mc->object_count > 0 ? &mc->objects[mc->object_count - 1] : NULL;
 				if (last == NULL || last->material != p->material[i] || last->first + last->count != e) {
 					/* Loose points never meet their own kind here (particle pairs do). */
-					mc->objects[mc->object_count++] = (collision_object){e, 0, p->material[i], false, {0}};
+					mc->objects[mc->object_count++] =
+					    (collision_object){e, 0, p->material[i], false, {0}, -1};
 					last = &mc->objects[mc->object_count - 1];
 				}
 				last->count += 1;
@@ -307,6 +336,7 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 		}
 		mc->element_count = count;
+		ok = build_collider_features(sim, mc, edges, edge_count);
 		/* Each object's tree, shaped from the current positions. */
 		vec3 *centres = mc->lower;
 		for (int k = 0; k < count; ++k) {
@@ -893,6 +923,13 @@ static bool vertex_meets_face(const plait_material *mv, const plait_material *mo
 	return mo->type != PLAIT_OBJECT_COLLIDER || mv->type == PLAIT_OBJECT_COLLIDER;
 }
 
+static void live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices, uint8_t *edges);
+
+static int bits3(unsigned bits)
+{
+	return (int)(bits & 1u) + (int)((bits >> 1) & 1u) + (int)((bits >> 2) & 1u);
+}
+
 /* The primitive pairs an element pair owns, each handed to visit_primitives. In the gather,
  * most are rejected first from the elements' points (loaded once) and shapes, before
  * visit_primitives loads them again for its exact test; the other stages see them all. The
@@ -912,6 +949,29 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 		}
 	}
 	float gap = pass->list_distance;
+	/* A filtered collider's corners and edges that its smooth reach keeps from this cloth's. */
+	uint8_t own_vertices[2] = {ea->own_vertices, eb->own_vertices},
+	        own_edges[2] = {ea->own_edges, eb->own_edges};
+	const plait_mesh_contacts *mc = pass->mc;
+	int collider = self                                ? -1
+	               : ma->type == PLAIT_OBJECT_COLLIDER ? 0
+	               : mb->type == PLAIT_OBJECT_COLLIDER ? 1
+	                                                   : -1;
+	if (collider >= 0) {
+		int all = bits3(own_vertices[collider]) + bits3(own_edges[collider]);
+		if (mc->features != NULL &&
+		    mc->objects[mc->object_of[(collider == 0 ? ea : eb)->v[0]]].features >= 0) {
+			uint8_t vertices, edges;
+			live_features(mc, collider == 0 ? a : b, collider == 0 ? b : a, &vertices, &edges);
+			own_vertices[collider] &= vertices;
+			own_edges[collider] &= edges;
+		}
+		if (pass->stage == STAGE_GATHER) {
+			int kept = bits3(own_vertices[collider]) + bits3(own_edges[collider]);
+			pass->mc->features_kept += kept;
+			pass->mc->features_left_out += all - kept;
+		}
+	}
 	int v[4];
 	for (int turn = 0; turn < 2; ++turn) {
 		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
@@ -919,7 +979,7 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 		const vec3 *vx = x[turn], *ox = x[1 - turn];
 		const plait_material *mv = turn == 0 ? ma : mb, *mo = turn == 0 ? mb : ma;
 		for (int k = 0; k < vertex_side->size; ++k) {
-			if (!(vertex_side->own_vertices & (1u << k))) {
+			if (!(own_vertices[turn] & (1u << k))) {
 				continue;
 			}
 			v[0] = vertex_side->v[k];
@@ -950,13 +1010,13 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 	if (ea->size >= 2 && eb->size >= 2 && (!self || self_allows(ma, PAIR_EDGE_EDGE))) {
 		int edges_a = ea->size == 2 ? 1 : 3, edges_b = eb->size == 2 ? 1 : 3;
 		for (int i = 0; i < edges_a; ++i) {
-			if (!(ea->own_edges & (1u << i))) {
+			if (!(own_edges[0] & (1u << i))) {
 				continue;
 			}
 			int i1 = i + 1 < ea->size ? i + 1 : 0;
 			for (int j = 0; j < edges_b; ++j) {
 				int j1 = j + 1 < eb->size ? j + 1 : 0;
-				if (!(eb->own_edges & (1u << j)) ||
+				if (!(own_edges[1] & (1u << j)) ||
 				    (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap))) {
 					continue;
 				}
@@ -1019,6 +1079,531 @@ static void visit_elements(int a, int b, void *context)
 	}
 }
 
+/* ---- Which of a collider's corners and edges need mesh contacts ---------------------------
+ *
+ * A collider's faces meet cloth vertices in the collider pass (contact.c), which ends every
+ * substep (and every failsafe round) with each vertex at least its contact distance r (its
+ * radius plus the collider's thickness) outside the collider. Mesh contacts add the collider's
+ * corners against cloth triangles and its edges against cloth edges, for what reaches between
+ * vertices held out like that. Where the collider is smooth at the scale of the cloth's
+ * triangles nothing can, and a corner or edge there is left out. The argument, for a cloth
+ * triangle T whose edges are at most D long and whose vertices v_i are at least m = r / 2 (the
+ * half of r this leans on) from the collider's surface, on its outside:
+ *
+ * Take a point x of a corner or edge f, and the plane Q through x normal to f's reference
+ * normal n0 (the mean of the normals of f's faces). Let M = sqrt(3) m. Suppose every face within
+ * distance t + M of f makes an angle at most A(t) < 1 rad with n0, for every t up to D, and
+ * none of them has an edge not shared by exactly two faces. Then, over the disc of radius D
+ * about x in Q, the surface through x is a graph h over Q (h(x) = 0) with slope at most
+ * tan A(t) at distance t from x: walking out from x, the surface point above or below where we
+ * are is within t + |h| of x, on a face within that distance of f, and each face leads on to
+ * exactly one other. So |h| <= F(t) at distance t, F the integral of tan A from 0, and while
+ * F(D) < M the walk never leaves the faces counted. No other sheet of the surface comes within
+ * the disc: it would be a face within D + M facing away from n0 (closed surfaces), or one with
+ * an open edge.
+ *
+ * If T touched f at x, then x = sum of l_i v_i (barycentric) and, in heights over Q, each v_i
+ * is at least m above the graph under it (that point of the surface is at least m from v_i; for
+ * a surface oriented the other way, below it, with signs turned), so with d_i = |v_i - x|
+ *   0 = height(x) - h(x) = sum l_i (height(v_i) - h(v_i)) + sum l_i h(v_i) >= m - sum l_i F(d_i).
+ * F is convex with F(0) = 0, so F(d_i) <= F(D) d_i / D, and sum l_i d_i <= (sum l_i d_i^2)^1/2
+ * = (sum over i < j of l_i l_j |v_i - v_j|^2)^1/2 <= D / sqrt(3): m <= F(D) / sqrt(3), false when
+ * F(D) < M. Where F(D) < M, then, f touches no cloth triangle (or segment) with edges up to D at
+ * the end of a substep and needs no contacts with it. smooth_reach finds, per corner and edge,
+ * the largest such D: its smooth reach.
+ *
+ * A crossing of T and the collider at the end of a substep needs a collider edge through T (a
+ * straight cut of T by one face would leave a vertex of T inside), an edge that can touch T:
+ * one whose reach is at most T's longest edge. It came through T, from the free start of the
+ * substep, past one of T's edges or with a corner through T. So an edge-edge pair is kept when
+ * either triangle of its cloth edge is long enough for the collider's edge, and a corner's reach
+ * is at most its edges': then every crossing is one the listed pairs and the failsafe see.
+ * Concave and flat edges fall out of the same bound (their faces turn little against n0), and
+ * sharp ones keep their contacts at any D.
+ *
+ * Each cloth element's D (pair_reach) is the longest edge of it and of the triangles across its
+ * edges: at a listing with slack, and the list covers only while no edge outgrows it; in the
+ * failsafe's traversal, as they end the substep (measure_cloth_edges). A deforming collider's
+ * angles change from frame to frame, and between frames its triangles' normals are not bounded
+ * by those at the frames: it keeps all its corners and edges. */
+
+/* The share of the contact distance the argument leans on: the collider pass pushes vertices
+ * out to all of it, friction and other colliders can take back some. */
+#define SMOOTH_MARGIN 0.5f
+/* A listing's bound on a cloth edge near a filtered collider: this many times its length now. */
+#define CLOTH_EDGE_SLACK 1.1f
+/* Reaches are looked for up to this many times the longest cloth edge at the build (beyond
+ * that, a stretched cloth meets every corner and edge again). */
+#define SMOOTH_RANGE 2.0f
+/* Radians: a face this steep against a feature's reference normal ends its smooth reach. */
+#define SMOOTH_STEEPEST 1.0f
+
+typedef struct face_sample {
+	float distance; /* from the feature, scene units (a lower bound) */
+	float angle;    /* against the feature's reference normal, radians */
+} face_sample;
+
+typedef struct feature_query {
+	const plait_allocator *allocator;
+	const plait_mesh_shape *shape;
+	const bool *open; /* per triangle: an edge of it is not shared by exactly two */
+	vec3 a, b;        /* a corner (b == a) or an edge */
+	bool corner;
+	vec3 normal; /* unit reference normal */
+	float range;
+	face_sample *samples;
+	int count, capacity;
+	bool failed;
+} feature_query;
+
+static int compare_samples(const void *a, const void *b)
+{
+	const face_sample *x = a, *y = b;
+	if (x->distance != y->distance) {
+		return x->distance < y->distance ? -1 : 1;
+	}
+	return x->angle < y->angle ? -1 : x->angle > y->angle;
+}
+
+/* The distance from a corner or edge to a triangle (an edge through the triangle is at 0). */
+static float feature_triangle_distance(vec3 a, vec3 b, bool corner, const vec3 *t)
+{
+	int region;
+	float d = v3_length(v3_sub(a, plait_closest_point_on_triangle(a, t[0], t[1], t[2], &region, NULL)));
+	if (corner) {
+		return d;
+	}
+	d = plait_minf(d,
+	               v3_length(v3_sub(b, plait_closest_point_on_triangle(b, t[0], t[1], t[2], &region, NULL))));
+	for (int k = 0; k < 3; ++k) {
+		float s, u;
+		d = plait_minf(d, sqrtf(plait_closest_segments(a, b, t[k], t[(k + 1) % 3], &s, &u)));
+	}
+	vec3 n = v3_cross(v3_sub(t[1], t[0]), v3_sub(t[2], t[0]));
+	float da = v3_dot(v3_sub(a, t[0]), n), db = v3_dot(v3_sub(b, t[0]), n);
+	if ((da < 0.0f) != (db < 0.0f)) {
+		/* Where the edge meets the triangle's plane: inside it, the distance is 0. */
+		vec3 x = v3_lerp(a, b, da / (da - db));
+		d = plait_minf(
+		    d, v3_length(v3_sub(x, plait_closest_point_on_triangle(x, t[0], t[1], t[2], &region, NULL))));
+	}
+	return d;
+}
+
+static void sample_face(int triangle, void *context)
+{
+	feature_query *q = context;
+	const int *tri = q->shape->triangles[triangle];
+	vec3 t[3] = {q->shape->positions[tri[0]], q->shape->positions[tri[1]], q->shape->positions[tri[2]]};
+	/* Less a rounding allowance: the distance must not be overstated. */
+	float distance = plait_maxf(feature_triangle_distance(q->a, q->b, q->corner, t) - 1e-6f, 0.0f);
+	if (distance > q->range || q->failed) {
+		return;
+	}
+	vec3 n = q->shape->normals[triangle];
+	float angle = SMOOTH_STEEPEST; /* open or degenerate: a wall */
+	if (!q->open[triangle] && v3_length_sq(n) > 0.0f) {
+		angle = acosf(plait_maxf(-1.0f, plait_minf(1.0f, v3_dot(n, q->normal))));
+	}
+	if (q->count == q->capacity) {
+		int capacity = q->capacity < 64 ? 64 : 2 * q->capacity;
+		face_sample *bigger = plait_alloc(q->allocator, sizeof *bigger * (size_t)capacity);
+		if (bigger == NULL) {
+			q->failed = true;
+			return;
+		}
+		if (q->count > 0) {
+			memcpy(bigger, q->samples, sizeof *bigger * (size_t)q->count);
+		}
+		plait_free(q->allocator, q->samples);
+		q->samples = bigger;
+		q->capacity = capacity;
+	}
+	q->samples[q->count++] = (face_sample){distance, angle};
+}
+
+/* The longest cloth edge D for which F(D) < budget (M above), for the feature of q with its
+ * faces within q->range sampled; at most q->range - budget (farther faces are not known). */
+static float reach_within(feature_query *q, float budget, float range)
+{
+	vec3 lower = v3_min(q->a, q->b), upper = v3_max(q->a, q->b);
+	vec3 grow = v3(range, range, range);
+	q->count = 0;
+	float full = q->range;
+	q->range = range;
+	plait_mesh_shape_visit(q->shape, v3_sub(lower, grow), v3_add(upper, grow), true, sample_face, q);
+	q->range = full;
+	if (q->failed) {
+		return -1.0f;
+	}
+	qsort(q->samples, (size_t)q->count, sizeof *q->samples, compare_samples);
+	/* A(t) steps up as faces come within t + budget; F grows by tan A over each step. */
+	float t = 0.0f, fall = 0.0f, steepest = 0.0f;
+	int k = 0;
+	for (;;) {
+		while (k < q->count && q->samples[k].distance - budget <= t) {
+			steepest = plait_maxf(steepest, q->samples[k].angle);
+			++k;
+		}
+		if (steepest >= SMOOTH_STEEPEST) {
+			return t;
+		}
+		float next = k < q->count ? q->samples[k].distance - budget : range - budget;
+		float slope = tanf(steepest);
+		if (fall + slope * (next - t) >= budget) {
+			return t + (budget - fall) / slope;
+		}
+		if (k >= q->count) {
+			return next;
+		}
+		fall += slope * (next - t);
+		t = next;
+	}
+}
+
+/* The same over q->range, sampled in widening rounds: most reaches end well inside it. */
+static float smooth_reach(feature_query *q, float budget)
+{
+	float range = budget + 0.25f * (q->range - budget);
+	for (;;) {
+		float reach = reach_within(q, budget, range);
+		if (reach < 0.999f * (range - budget) || range >= q->range) {
+			return reach;
+		}
+		range = plait_minf(q->range, budget + 2.0f * (range - budget));
+	}
+}
+
+/* How far a feature's faces need sampling: F(D) >= D tan A(0), and A(0) is at least the angle
+ * of its own faces against its normal (cosine `own`), so its reach stays under budget / tan of
+ * that. (Sampling less only lowers reaches.) */
+static float capped_range(float range, float budget, float own)
+{
+	float angle = acosf(plait_maxf(-1.0f, plait_minf(1.0f, own)));
+	if (angle >= SMOOTH_STEEPEST) {
+		return budget; /* reach 0 */
+	}
+	float slope = tanf(angle);
+	return slope > 0.0f ? plait_minf(range, budget + 1.01f * budget / slope) : range;
+}
+
+/* The mean of unit normals, made unit; zero when they cancel out (no side to stand on). */
+static vec3 reference_normal(vec3 sum, int count)
+{
+	float length = v3_length(sum);
+	return length > 0.5f * (float)count ? v3_scale(sum, 1.0f / length) : v3(0.0f, 0.0f, 0.0f);
+}
+
+/* The smooth reaches of one rigid collider's corners and edges (object o, from surface s),
+ * into mc->features; false only when out of memory. */
+static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_object *o,
+                             const plait_mesh_shape *shape, float budget, float range, int features)
+{
+	const plait_allocator *a = &sim->allocator;
+	int nt = shape->triangle_count, nv = shape->vertex_count;
+	edge_key *edges = plait_alloc(a, sizeof *edges * (size_t)(3 * nt));
+	int *edge_of = plait_alloc(a, sizeof(int) * (size_t)(3 * nt)); /* (t, k) -> first key of its run */
+	bool *open = plait_alloc_zero(a, (size_t)nt, sizeof(bool));
+	float *edge_reach = plait_alloc(a, sizeof(float) * (size_t)(3 * nt));
+	float *vertex_reach = plait_alloc(a, sizeof(float) * (size_t)nv);
+	vec3 *vertex_normal = plait_alloc_zero(a, (size_t)nv, sizeof(vec3));
+	int *star = plait_alloc_zero(a, (size_t)nv, sizeof(int));
+	float *star_cos = plait_alloc(a, sizeof(float) * (size_t)nv); /* of the steepest face of its star */
+	feature_query q = {.allocator = a, .shape = shape, .open = open, .corner = true, .range = range};
+	bool ok = edges != NULL && edge_of != NULL && open != NULL && edge_reach != NULL &&
+	          vertex_reach != NULL && vertex_normal != NULL && star != NULL && star_cos != NULL;
+	if (ok) {
+		for (int t = 0; t < nt; ++t) {
+			for (int k = 0; k < 3; ++k) {
+				int i = shape->triangles[t][k], j = shape->triangles[t][(k + 1) % 3];
+				edges[3 * t + k] = (edge_key){i < j ? i : j, i < j ? j : i, t, k};
+				vertex_normal[i] = v3_add(vertex_normal[i], shape->normals[t]);
+				star[i] += 1;
+			}
+		}
+		qsort(edges, (size_t)(3 * nt), sizeof *edges, compare_edges);
+		for (int start = 0; start < 3 * nt;) {
+			int end = start + 1;
+			while (end < 3 * nt && edges[end].low == edges[start].low &&
+			       edges[end].high == edges[start].high) {
+				++end;
+			}
+			for (int k = start; k < end; ++k) {
+				edge_of[3 * edges[k].element + edges[k].k] = start;
+				open[edges[k].element] = open[edges[k].element] || end - start != 2;
+			}
+			start = end;
+		}
+		for (int v = 0; v < nv; ++v) {
+			vertex_reach[v] = range - budget;
+			star_cos[v] = 1.0f;
+		}
+		for (int t = 0; t < nt; ++t) {
+			for (int k = 0; k < 3; ++k) {
+				int v = shape->triangles[t][k];
+				vec3 n0 = reference_normal(vertex_normal[v], star[v]);
+				star_cos[v] = plait_minf(star_cos[v], v3_dot(n0, shape->normals[t]));
+			}
+		}
+		/* Edges first: a corner is kept whenever an edge of it is. */
+		for (int start = 0; start < 3 * nt && !q.failed;) {
+			int end = start + 1;
+			while (end < 3 * nt && edges[end].low == edges[start].low &&
+			       edges[end].high == edges[start].high) {
+				++end;
+			}
+			float reach = -1.0f;
+			if (end - start == 2) {
+				q.a = shape->positions[edges[start].low];
+				q.b = shape->positions[edges[start].high];
+				q.corner = false;
+				q.normal = reference_normal(
+				    v3_add(shape->normals[edges[start].element], shape->normals[edges[start + 1].element]),
+				    2);
+				q.range = capped_range(range, budget, v3_dot(q.normal, shape->normals[edges[start].element]));
+				reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, budget) : -1.0f;
+			}
+			edge_reach[start] = reach;
+			vertex_reach[edges[start].low] = plait_minf(vertex_reach[edges[start].low], reach);
+			vertex_reach[edges[start].high] = plait_minf(vertex_reach[edges[start].high], reach);
+			start = end;
+		}
+		for (int v = 0; v < nv && !q.failed; ++v) {
+			if (star[v] == 0 || !(vertex_reach[v] > 0.0f)) {
+				continue;
+			}
+			q.a = q.b = shape->positions[v];
+			q.corner = true;
+			q.normal = reference_normal(vertex_normal[v], star[v]);
+			q.range = capped_range(range, budget, star_cos[v]);
+			float reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, budget) : -1.0f;
+			vertex_reach[v] = plait_minf(vertex_reach[v], reach);
+		}
+		ok = !q.failed;
+	}
+	if (ok) {
+		for (int t = 0; t < nt; ++t) {
+			const element *el = &mc->elements[o->first + t];
+			collider_features *f = &mc->features[features + t];
+			f->vertices = el->own_vertices;
+			f->edges = el->own_edges;
+			for (int k = 0; k < 3; ++k) {
+				f->reach[k] = vertex_reach[shape->triangles[t][k]];
+				f->reach[3 + k] = edge_reach[edge_of[3 * t + k]];
+			}
+		}
+	}
+	plait_free(a, q.samples);
+	plait_free(a, edges);
+	plait_free(a, edge_of);
+	plait_free(a, open);
+	plait_free(a, edge_reach);
+	plait_free(a, vertex_reach);
+	plait_free(a, vertex_normal);
+	plait_free(a, star);
+	plait_free(a, star_cos);
+	return ok;
+}
+
+/* Whether an object's cloth triangles or curve segments meet colliders' surfaces here. */
+static bool meets_collider_surfaces(const plait_sim *sim, const plait_mesh_contacts *mc,
+                                    const collision_object *o)
+{
+	const plait_material *m = &sim->materials[o->material];
+	return m->type != PLAIT_OBJECT_COLLIDER && m->collider_flag != PLAIT_COLLIDE_VERTEX && o->count > 0 &&
+	       mc->elements[o->first].size >= 2;
+}
+
+/* The smooth reaches of every rigid mesh collider's corners and edges (see above), from the
+ * current shapes: the contact distance from the thinnest cloth or curve that meets them, the
+ * range from their longest edge. Colliders with nothing to leave out (boxes) keep features -1. */
+static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, const edge_key *edges,
+                                    int edge_count)
+{
+	const plait_particles *p = &sim->particles;
+	float thinnest = INFINITY, longest = 0.0f;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			for (int m = 0; m < el->size; ++m) {
+				vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
+				longest = plait_maxf(longest, v3_length(d));
+				thinnest = plait_minf(thinnest, p->radius[el->v[m]]);
+			}
+		}
+	}
+	if (!(longest > 0.0f) || !isfinite(thinnest)) {
+		return true;
+	}
+	int total = 0;
+	for (int k = 0; k < mc->object_count; ++k) {
+		if (sim->materials[mc->objects[k].material].type == PLAIT_OBJECT_COLLIDER) {
+			total += mc->objects[k].count;
+		}
+	}
+	if (total == 0) {
+		return true;
+	}
+	mc->features = plait_alloc_zero(&sim->allocator, (size_t)total, sizeof *mc->features);
+	if (mc->features == NULL) {
+		return false;
+	}
+	int next = 0;
+	for (int k = 0; k < mc->object_count; ++k) {
+		collision_object *o = &mc->objects[k];
+		const plait_material *m = &sim->materials[o->material];
+		if (m->type != PLAIT_OBJECT_COLLIDER) {
+			continue;
+		}
+		const plait_collider *c = NULL;
+		for (int i = 0; i < sim->collider_count; ++i) {
+			c = sim->colliders[i].object == m->object ? &sim->colliders[i] : c;
+		}
+		const plait_mesh_shape *shape = NULL;
+		for (int s = 0; s < sim->surface_count; ++s) {
+			shape = sim->surfaces[s].material == o->material ? sim->surfaces[s].shape : shape;
+		}
+		/* M above: sqrt(3) times the margin the argument leans on. */
+		float budget = 1.7320508f * SMOOTH_MARGIN * (thinnest + (c != NULL ? c->thickness : 0.0f));
+		if (c == NULL || c->mesh_start != NULL || shape == NULL || shape->triangle_count != o->count ||
+		    !(budget > 0.0f)) {
+			continue; /* deforming (or unknown): every corner and edge keeps its contacts */
+		}
+		if (!collider_reaches(sim, mc, o, shape, budget, SMOOTH_RANGE * longest + budget, next)) {
+			return false;
+		}
+		bool any = false;
+		for (int t = 0; t < o->count && !any; ++t) {
+			for (int q = 0; q < 6; ++q) {
+				any = any || mc->features[next + t].reach[q] > 0.0f;
+			}
+		}
+		if (any) {
+			o->features = next;
+			next += o->count;
+		}
+	}
+	if (next == 0) {
+		plait_free(&sim->allocator, mc->features);
+		mc->features = NULL;
+		return true;
+	}
+	int count = mc->element_count;
+	mc->neighbours = plait_alloc(&sim->allocator, sizeof *mc->neighbours * (size_t)count);
+	mc->cloth_bound = plait_alloc_zero(&sim->allocator, (size_t)count, sizeof(float));
+	mc->cloth_bound_scratch = plait_alloc_zero(&sim->allocator, (size_t)count, sizeof(float));
+	mc->pair_reach = plait_alloc_zero(&sim->allocator, (size_t)count, sizeof(float));
+	if (mc->neighbours == NULL || mc->cloth_bound == NULL || mc->cloth_bound_scratch == NULL ||
+	    mc->pair_reach == NULL) {
+		return false;
+	}
+	for (int e = 0; e < count; ++e) {
+		mc->neighbours[e][0] = mc->neighbours[e][1] = mc->neighbours[e][2] = -1;
+	}
+	for (int k = 0; k + 1 < edge_count; ++k) {
+		const edge_key *x = &edges[k], *y = &edges[k + 1];
+		if (x->low == y->low && x->high == y->high) {
+			mc->neighbours[x->element][x->k] = y->element;
+			mc->neighbours[y->element][y->k] = x->element;
+		}
+	}
+	return true;
+}
+
+/* The longest edge of each cloth triangle and curve segment that meets filtered colliders,
+ * into mc->cloth_bound (grown by `slack`), and each one's D for its element pairs with them,
+ * into mc->pair_reach: the largest bound over it and the triangles across its edges (an edge-edge
+ * pair is owned by one of the two triangles of its cloth edge, and must hold for both). At a
+ * listing the bound has slack, and the list covers only while no edge outgrows it
+ * (list_covers); the failsafe's traversal measures the substep's end, with none. */
+static void measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, float slack)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			float edge_sq = 0.0f;
+			for (int m = 0; m < el->size; ++m) {
+				vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
+				edge_sq = plait_maxf(edge_sq, v3_length_sq(d));
+			}
+			mc->pair_reach[e] = slack * sqrtf(edge_sq);
+		}
+		if (slack > 1.0f) {
+			for (int e = o->first; e < o->first + o->count; ++e) {
+				mc->cloth_bound[e] = mc->pair_reach[e];
+			}
+		}
+		/* The neighbours' bounds, read from cloth_bound (at a listing) or from a second pass. */
+		const float *bound = slack > 1.0f ? mc->cloth_bound : mc->pair_reach;
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			float reach = bound[e];
+			for (int q = 0; q < 3; ++q) {
+				int n = mc->neighbours[e][q];
+				reach = n >= 0 ? plait_maxf(reach, bound[n]) : reach;
+			}
+			mc->cloth_bound_scratch[e] = reach;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			mc->pair_reach[e] = mc->cloth_bound_scratch[e];
+		}
+	}
+}
+
+/* Whether every cloth edge that meets filtered colliders is still within its bound. */
+static bool cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_contacts *mc)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			float bound_sq = mc->cloth_bound[e] * mc->cloth_bound[e];
+			for (int m = 0; m < el->size; ++m) {
+				vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
+				if (v3_length_sq(d) > bound_sq) {
+					return false;
+				}
+			}
+		}
+	}
+	return true;
+}
+
+/* Which corners and edges of a filtered collider's element c meet cloth element e here: bits of
+ * its own vertices and edges whose smooth reach the cloth's D (pair_reach) does not stay under. */
+static void live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices, uint8_t *edges)
+{
+	const collision_object *o = &mc->objects[mc->object_of[mc->elements[c].v[0]]];
+	const collider_features *f = &mc->features[o->features + c - o->first];
+	float d = mc->pair_reach[e];
+	uint8_t v = 0, g = 0;
+	for (int q = 0; q < 3; ++q) {
+		v |= (uint8_t)((d >= f->reach[q]) << q);
+		g |= (uint8_t)((d >= f->reach[3 + q]) << q);
+	}
+	*vertices = v;
+	*edges = g;
+}
+
+void plait_mesh_contacts_collider_features(const plait_sim *sim, int *kept, int *left_out)
+{
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	*kept = mc != NULL ? mc->features_kept : 0;
+	*left_out = mc != NULL ? mc->features_left_out : 0;
+}
+
 /* Element boxes. For the gather: around the current positions, grown by LIST_SCALE times the
  * element's reach plus its largest guard (a pair within its list distance has overlapping
  * boxes). For the failsafe: around the paths of the substep, grown by `margin`. */
@@ -1062,6 +1647,9 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 		}
 		mc->lower[e] = v3_sub(lower, v3(g, g, g));
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
+	}
+	if (mc->features != NULL) {
+		measure_cloth_edges(sim, mc, paths ? 1.0f : CLOTH_EDGE_SLACK);
 	}
 	for (int k = 0; k < mc->object_count; ++k) {
 		collision_object *o = &mc->objects[k];
@@ -1233,6 +1821,7 @@ static void gather(plait_sim *sim, plait_mesh_contacts *mc)
 			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
 		}
 	}
+	mc->features_kept = mc->features_left_out = 0;
 	fit_boxes(sim, mc, false, 0.0f);
 	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
 	traverse_objects(mc, &pass);
@@ -1250,6 +1839,9 @@ static bool list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with
 {
 	if (!mc->list_valid) {
 		return false;
+	}
+	if (mc->features != NULL && !cloth_edges_within_bounds(sim, mc)) {
+		return false; /* D of the colliders' corners and edges left out no longer holds */
 	}
 	const plait_particles *p = &sim->particles;
 	for (int when = with_start ? 0 : 1; when < 2; ++when) {

@@ -39,4 +39,9 @@ void plait_mesh_contacts_failsafe(plait_sim *sim);
 
 void plait_mesh_contacts_destroy(plait_sim *sim);
 
+/* Corners and edges of mesh and box colliders that the last listing met in element pairs with
+ * cloth or curves (each once per pair): *kept those it tested, *left_out those smooth at the
+ * scale of the other's triangles, left to the collider pass (for tests and benchmarks). */
+void plait_mesh_contacts_collider_features(const plait_sim *sim, int *kept, int *left_out);
+
 #endif
