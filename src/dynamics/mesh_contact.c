@@ -259,11 +259,13 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	/* At most one object per surface, per chain and per particle run. */
 	mc->objects =
 	    plait_alloc_zero(a, (size_t)(sim->surface_count + sim->chain_count + points), sizeof *mc->objects);
+	bool active = false;
+	int edge_count = 0;
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
 	          mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL && edges != NULL &&
 	          owned != NULL && mc->objects != NULL;
 	if (ok) {
-		int e = 0, edge_count = 0;
+		int e = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {
 			const plait_surface *surface = &sim->surfaces[s];
 			if (!material_collides(sim, surface->material)) {
@@ -336,6 +338,12 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 		}
 		mc->element_count = count;
+		/* One object that does not collide with itself meets nothing here: its contacts with
+		 * colliders are the particle pass's (contact.c). It needs no trees, features or rest
+		 * pairs (a hanging cloth's tree cost more than its first frame's solve). */
+		active = mc->object_count > 1 || (mc->object_count == 1 && mc->objects[0].self);
+	}
+	if (ok && active) {
 		ok = build_collider_features(sim, mc, edges, edge_count);
 		/* Each object's tree, shaped from the current positions. */
 		vec3 *centres = mc->lower;
@@ -365,9 +373,7 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 		free_elements(mc, a);
 		return false;
 	}
-	/* One object that does not collide with itself meets nothing here: its contacts with
-	 * colliders are the particle pass's (contact.c). */
-	mc->active = mc->object_count > 1 || (mc->object_count == 1 && mc->objects[0].self);
+	mc->active = active;
 	if (!mc->active) {
 		free_elements(mc, a);
 	}
