@@ -989,15 +989,22 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 				continue;
 			}
 			v[0] = vertex_side->v[k];
-			bool far = cull && point_far(vx[k], other, os, ox, gap);
+			/* A vertex of the other element (neighbours in one object): every pair with it
+			 * but one vertex-vertex pair shares a vertex, which visit_primitives passes over;
+			 * skipped here before any distance. */
+			bool shared = self && (v[0] == other->v[0] || v[0] == other->v[1] || v[0] == other->v[2]);
+			if (shared && !(turn == 0 && self_allows(ma, PAIR_VERTEX_VERTEX))) {
+				continue;
+			}
+			bool far = cull && !shared && point_far(vx[k], other, os, ox, gap);
 			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
-			    vertex_meets_face(mv, mo) && !far) {
+			    vertex_meets_face(mv, mo) && !far && !shared) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				v[3] = other->v[2];
 				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
 			}
-			if (other->size == 2 && vertex_side->size == 1 && !far) {
+			if (other->size == 2 && vertex_side->size == 1 && !far && !shared) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
@@ -1022,8 +1029,15 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 			int i1 = i + 1 < ea->size ? i + 1 : 0;
 			for (int j = 0; j < edges_b; ++j) {
 				int j1 = j + 1 < eb->size ? j + 1 : 0;
-				if (!(own_edges[1] & (1u << j)) ||
-				    (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap))) {
+				if (!(own_edges[1] & (1u << j))) {
+					continue;
+				}
+				/* Edges with an end in common (neighbours): passed over before any distance. */
+				if (self && (ea->v[i] == eb->v[j] || ea->v[i] == eb->v[j1] || ea->v[i1] == eb->v[j] ||
+				             ea->v[i1] == eb->v[j1])) {
+					continue;
+				}
+				if (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap)) {
 					continue;
 				}
 				v[0] = ea->v[i];
