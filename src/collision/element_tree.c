@@ -118,23 +118,37 @@ static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *
 	}
 }
 
-/* The traversal for both queries: `self` when the two trees are one. */
-static void traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
-                     const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
-                     float margin, plait_element_pair_visitor *visit, void *context)
+/* The traversal for both queries, from node pair (start_a, start_b) (0, 0: the whole trees);
+ * `self` when the two trees are one. With pieces != NULL it does not descend below `depth`
+ * pair splits: the node pairs it stops at (and the leaf pairs above that depth) go to pieces in
+ * the order the full traversal would meet them, and their count is returned (-1 past
+ * capacity). */
+static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
+                    const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
+                    float margin, int start_a, int start_b, plait_element_pair_visitor *visit, void *context,
+                    int depth, int (*pieces)[2], int capacity)
 {
 	if (tree_a->node_count == 0 || tree_b->node_count == 0) {
-		return;
+		return 0;
 	}
-	int stack[2 * STACK_PAIRS];
-	int top = 0;
-	stack[top++] = 0;
+	int stack[3 * STACK_PAIRS];
+	int top = 0, count = 0;
+	stack[top++] = start_a;
+	stack[top++] = start_b;
 	stack[top++] = 0;
 	while (top > 0) {
-		int nb = stack[--top], na = stack[--top];
+		int level = stack[--top], nb = stack[--top], na = stack[--top];
 		const plait_tree_node *a = &tree_a->nodes[na], *b = &tree_b->nodes[nb];
 		bool same = self && na == nb;
 		if (!same && !boxes_overlap(a->lower, a->upper, b->lower, b->upper, margin)) {
+			continue;
+		}
+		if (pieces != NULL && (level >= depth || (a->count > 0 && b->count > 0))) {
+			if (count == capacity) {
+				return -1;
+			}
+			pieces[count][0] = na;
+			pieces[count++][1] = nb;
 			continue;
 		}
 		if (a->count > 0 && b->count > 0) {
@@ -148,26 +162,32 @@ static void traverse(const plait_element_tree *tree_a, const vec3 *lower_a, cons
 			for (int k = 0; k < 3; ++k) {
 				stack[top++] = pushes[k][0];
 				stack[top++] = pushes[k][1];
+				stack[top++] = level + 1;
 			}
 		} else if (b->count > 0 || (a->count == 0 && na <= nb)) {
 			/* Split the inner node (the shallower one when both are inner: a balanced descent). */
 			stack[top++] = a->first + 1;
 			stack[top++] = nb;
+			stack[top++] = level + 1;
 			stack[top++] = a->first;
 			stack[top++] = nb;
+			stack[top++] = level + 1;
 		} else {
 			stack[top++] = na;
 			stack[top++] = b->first + 1;
+			stack[top++] = level + 1;
 			stack[top++] = na;
 			stack[top++] = b->first;
+			stack[top++] = level + 1;
 		}
 	}
+	return count;
 }
 
 void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                               plait_element_pair_visitor *visit, void *context)
 {
-	traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, visit, context);
+	(void)traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, 0, 0, visit, context, 0, NULL, 0);
 }
 
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
@@ -175,5 +195,22 @@ void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const ve
                                       const vec3 *lower_b, const vec3 *upper_b, float margin,
                                       plait_element_pair_visitor *visit, void *context)
 {
-	traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, visit, context);
+	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, 0, 0, visit, context, 0,
+	               NULL, 0);
+}
+
+int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
+                             float margin, int depth, int (*pieces)[2], int capacity)
+{
+	return traverse(tree_a, NULL, NULL, tree_b, NULL, NULL, self, margin, 0, 0, NULL, NULL, depth, pieces,
+	                capacity);
+}
+
+void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3 *lower_a,
+                                    const vec3 *upper_a, const plait_element_tree *tree_b,
+                                    const vec3 *lower_b, const vec3 *upper_b, bool self, float margin,
+                                    const int piece[2], plait_element_pair_visitor *visit, void *context)
+{
+	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, self, margin, piece[0], piece[1],
+	               visit, context, 0, NULL, 0);
 }

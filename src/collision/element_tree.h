@@ -48,4 +48,17 @@ void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const ve
                                       const vec3 *lower_b, const vec3 *upper_b, float margin,
                                       plait_element_pair_visitor *visit, void *context);
 
+/* The same traversals cut into pieces for workers: writes the node pairs (a, b) reached after
+ * `depth` splits (and the leaf pairs reached before), in the order the traversal meets them,
+ * and returns how many; -1 when more than capacity. The pairs of all pieces, each traversed by
+ * plait_element_tree_piece_pairs and taken in piece order, are the whole traversal's pairs in
+ * its order. self and margin as for the two queries above (self: tree_b is tree_a, margin 0);
+ * uses the node boxes of the last refit. */
+int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
+                             float margin, int depth, int (*pieces)[2], int capacity);
+void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3 *lower_a,
+                                    const vec3 *upper_a, const plait_element_tree *tree_b,
+                                    const vec3 *lower_b, const vec3 *upper_b, bool self, float margin,
+                                    const int piece[2], plait_element_pair_visitor *visit, void *context);
+
 #endif

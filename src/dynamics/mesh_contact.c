@@ -19,6 +19,10 @@ typedef enum pair_type {
 
 static const int pair_size[4] = {4, 4, 3, 2};
 
+/* Listing on the workers: traversals cut this many splits down, into at most so many pieces. */
+#define PIECE_DEPTH 6
+#define MAX_PIECES 2048
+
 /* A collision element: a triangle of a cloth, a segment of a curve, or a loose particle. Each
  * vertex and each edge is tested by exactly one element, its owner (the first element that has
  * it): a pair of primitives is then met once, through the pair of their owners, whose boxes
@@ -69,6 +73,19 @@ typedef struct contact_pair {
 	float lower;    /* rest pairs: a lower bound of their distance now, < 0 when unknown */
 } contact_pair;
 
+/* Listing on the workers (gather_on_workers): a piece of a traversal, and its own list. */
+typedef struct gather_piece {
+	int a, b;    /* collision objects (a == b: self) */
+	int node[2]; /* the node pair in their trees */
+} gather_piece;
+
+typedef struct piece_list {
+	contact_pair *pairs;
+	int count, capacity;
+	bool full;
+	int features_kept, features_left_out;
+} piece_list;
+
 typedef struct plait_mesh_contacts {
 	int element_count;
 	element *elements;
@@ -103,6 +120,12 @@ typedef struct plait_mesh_contacts {
 	contact_pair *pairs;
 	bool out_of_memory;   /* the candidate list could not grow: a contact may be left to the failsafe */
 	int traversal_sweeps; /* primitive pairs swept by the failsafe's last traversal (0 before it) */
+	/* Listing on the workers (gather_on_workers): the traversals' pieces, a list each, and the
+	 * length of the last list (to size the pieces' lists). */
+	int piece_count;
+	gather_piece *pieces;
+	piece_list *piece_lists;
+	int last_listed;
 	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
 	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
 	 * long as no vertex is farther than its guard from where it was then (list_covers). */
@@ -469,6 +492,13 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->x_gather);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
+	if (mc->piece_lists != NULL) {
+		for (int k = 0; k < MAX_PIECES; ++k) {
+			plait_free(a, mc->piece_lists[k].pairs);
+		}
+	}
+	plait_free(a, mc->piece_lists);
+	plait_free(a, mc->pieces);
 	plait_free(a, mc);
 	sim->mesh_contacts = NULL;
 }
@@ -631,6 +661,12 @@ typedef struct pair_pass {
 	int (*excluded)[2];
 	bool failed;
 	int swept; /* STAGE_FAILSAFE: primitive pairs swept */
+	/* STAGE_GATHER: where the listed pairs go; with fixed_capacity (on a worker, where the
+	 * allocator may not be called) a full list sets `full` instead of growing. */
+	contact_pair **out_pairs;
+	int *out_count, *out_capacity;
+	bool fixed_capacity, full;
+	int features_kept, features_left_out; /* STAGE_GATHER: see plait_mesh_contacts */
 } pair_pass;
 
 static bool shares_vertex(const int *v, int n)
@@ -674,10 +710,14 @@ static bool add_pair_to(plait_sim *sim, contact_pair **pairs, int *count, int *c
 	return true;
 }
 
-static bool add_pair(plait_sim *sim, plait_mesh_contacts *mc, const contact_pair *pair)
+static bool add_pair(pair_pass *pass, const contact_pair *pair)
 {
-	if (!add_pair_to(sim, &mc->pairs, &mc->pair_count, &mc->pair_capacity, pair)) {
-		mc->out_of_memory = true;
+	if (pass->fixed_capacity && *pass->out_count == *pass->out_capacity) {
+		pass->full = true;
+		return false;
+	}
+	if (!add_pair_to(pass->sim, pass->out_pairs, pass->out_count, pass->out_capacity, pair)) {
+		pass->mc->out_of_memory = true;
 		return false;
 	}
 	return true;
@@ -880,7 +920,7 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
 	 * bound). */
 	pair.lower = now - pass->pair_slack;
-	(void)add_pair(sim, mc, &pair);
+	(void)add_pair(pass, &pair);
 }
 
 static bool self_allows(const plait_material *m, int type)
@@ -974,8 +1014,8 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 		}
 		if (pass->stage == STAGE_GATHER) {
 			int kept = bits3(own_vertices[collider]) + bits3(own_edges[collider]);
-			pass->mc->features_kept += kept;
-			pass->mc->features_left_out += all - kept;
+			pass->features_kept += kept;
+			pass->features_left_out += all - kept;
 		}
 	}
 	int v[4];
@@ -1689,6 +1729,31 @@ static void visit_object_elements(int a, int b, void *context)
 	visit_elements(o->first_a + a, o->first_b + b, o->pass);
 }
 
+/* Whether objects a < b meet in mesh contacts. */
+static bool objects_meet(const plait_sim *sim, const plait_mesh_contacts *mc, int a, int b)
+{
+	const collision_object *oa = &mc->objects[a], *ob = &mc->objects[b];
+	if (!sim->settings.cloth_contacts) {
+		return false;
+	}
+	bool points_a = mc->elements[oa->first].size == 1, points_b = mc->elements[ob->first].size == 1;
+	if (points_a && points_b) {
+		return false; /* particle pairs (contact.c) */
+	}
+	const plait_material *ma = &sim->materials[oa->material], *mb = &sim->materials[ob->material];
+	bool collider_a = ma->type == PLAIT_OBJECT_COLLIDER, collider_b = mb->type == PLAIT_OBJECT_COLLIDER;
+	/* Colliders' surfaces (plait_collider.first) never push each other, nor cloth that meets
+	 * colliders with its vertices only (contact.c does that). */
+	return !((collider_a && collider_b) || (collider_a && mb->collider_flag == PLAIT_COLLIDE_VERTEX) ||
+	         (collider_b && ma->collider_flag == PLAIT_COLLIDE_VERTEX));
+}
+
+/* How far two objects' boxes reach across at a listing: their allowance. */
+static float listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b)
+{
+	return pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : 0.0f;
+}
+
 /* Every pair of elements that may touch: each self-colliding object with itself, then each
  * pair of objects that collide with each other. */
 static void traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
@@ -1701,31 +1766,182 @@ static void traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
 		if (oa->self) {
 			plait_element_tree_pairs(&oa->tree, la, ua, visit_object_elements, &self);
 		}
-		if (!sim->settings.cloth_contacts) {
-			continue;
-		}
 		for (int b = a + 1; b < mc->object_count; ++b) {
-			const collision_object *ob = &mc->objects[b];
-			bool points_a = mc->elements[oa->first].size == 1, points_b = mc->elements[ob->first].size == 1;
-			if (points_a && points_b) {
-				continue; /* particle pairs (contact.c) */
-			}
-			const plait_material *ma = &sim->materials[oa->material], *mb = &sim->materials[ob->material];
-			bool collider_a = ma->type == PLAIT_OBJECT_COLLIDER,
-			     collider_b = mb->type == PLAIT_OBJECT_COLLIDER;
-			if ((collider_a && collider_b) || (collider_a && mb->collider_flag == PLAIT_COLLIDE_VERTEX) ||
-			    (collider_b && ma->collider_flag == PLAIT_COLLIDE_VERTEX)) {
-				/* Colliders' surfaces (plait_collider.first) never push each other, nor cloth
-				 * that meets colliders with its vertices only (contact.c does that). */
+			if (!objects_meet(sim, mc, a, b)) {
 				continue;
 			}
+			const collision_object *ob = &mc->objects[b];
 			object_pass between = {pass, oa->first, ob->first};
-			/* At the listing, two objects' boxes also reach across their allowance. */
-			float margin = pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : 0.0f;
 			plait_element_tree_pairs_between(&oa->tree, la, ua, &ob->tree, mc->lower + ob->first,
-			                                 mc->upper + ob->first, margin, visit_object_elements, &between);
+			                                 mc->upper + ob->first, listing_margin(mc, pass, a, b),
+			                                 visit_object_elements, &between);
 		}
 	}
+}
+
+/* ---- Listing on the workers -------------------------------------------------------------
+ * The traversals of traverse_objects, cut into pieces (node pairs a few splits down), list
+ * side by side, each into a list of its own, and the lists are joined in piece order: the
+ * list is the one traverse_objects makes, pair for pair, whatever the number of workers. A
+ * worker may not call the allocator (its hooks need not be thread-safe): each piece's list is
+ * given room first, and a piece that runs out of it is listed again on the calling thread. */
+
+typedef struct piece_job {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+} piece_job;
+
+static void list_piece(plait_mesh_contacts *mc, pair_pass *pass, const gather_piece *piece)
+{
+	const collision_object *oa = &mc->objects[piece->a], *ob = &mc->objects[piece->b];
+	bool self = piece->a == piece->b;
+	object_pass o = {pass, oa->first, ob->first};
+	plait_element_tree_piece_pairs(&oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree,
+	                               mc->lower + ob->first, mc->upper + ob->first, self,
+	                               self ? 0.0f : listing_margin(mc, pass, piece->a, piece->b), piece->node,
+	                               visit_object_elements, &o);
+}
+
+static void list_pieces(void *context, int begin, int end)
+{
+	piece_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	for (int k = begin; k < end; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		list->count = 0;
+		pair_pass pass = {.sim = job->sim,
+		                  .mc = mc,
+		                  .stage = STAGE_GATHER,
+		                  .out_pairs = &list->pairs,
+		                  .out_count = &list->count,
+		                  .out_capacity = &list->capacity,
+		                  .fixed_capacity = true};
+		list_piece(mc, &pass, &mc->pieces[k]);
+		list->full = pass.full;
+		list->features_kept = pass.features_kept;
+		list->features_left_out = pass.features_left_out;
+	}
+}
+
+/* Cuts the traversals into mc->pieces (piece_count 0 when they do not fit); returns whether
+ * the cut is the one of the last listing, which had last_count pieces. */
+static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, int last_count)
+{
+	int(*nodes)[2] = plait_alloc_zero(&sim->allocator, MAX_PIECES, sizeof *nodes);
+	if (nodes == NULL) {
+		mc->piece_count = 0;
+		return false;
+	}
+	int count = 0;
+	bool fits = true, same = true;
+	for (int a = 0; a < mc->object_count && fits; ++a) {
+		for (int b = a; b < mc->object_count && fits; ++b) {
+			const collision_object *oa = &mc->objects[a], *ob = &mc->objects[b];
+			if ((a == b && !oa->self) || (a != b && !objects_meet(sim, mc, a, b))) {
+				continue;
+			}
+			pair_pass margin_pass = {.stage = STAGE_GATHER};
+			int n = plait_element_tree_split(&oa->tree, &ob->tree, a == b,
+			                                 a == b ? 0.0f : listing_margin(mc, &margin_pass, a, b),
+			                                 PIECE_DEPTH, nodes, MAX_PIECES - count);
+			fits = n >= 0;
+			for (int k = 0; k < n; ++k) {
+				gather_piece piece = {a, b, {nodes[k][0], nodes[k][1]}};
+				const gather_piece *was = &mc->pieces[count];
+				same = same && count < last_count && was->a == a && was->b == b &&
+				       was->node[0] == piece.node[0] && was->node[1] == piece.node[1];
+				mc->pieces[count++] = piece;
+			}
+		}
+	}
+	plait_free(&sim->allocator, nodes);
+	mc->piece_count = fits ? count : 0;
+	return fits && same && count == last_count;
+}
+
+/* The gather's traversal on the workers, into mc's list; false (nothing listed) when it cannot
+ * run there (out of memory, too many pieces): the caller then traverses on its own. */
+static bool gather_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	const plait_allocator *a = &sim->allocator;
+	if (mc->pieces == NULL) {
+		mc->pieces = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->pieces);
+		mc->piece_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_lists);
+		if (mc->pieces == NULL || mc->piece_lists == NULL) {
+			plait_free(a, mc->pieces);
+			plait_free(a, mc->piece_lists);
+			mc->pieces = NULL;
+			mc->piece_lists = NULL;
+			return false;
+		}
+	}
+	/* The first listing, with nothing to size the pieces' lists by, runs on the calling thread
+	 * (most pieces would fill their room and be listed twice). */
+	if (mc->last_listed == 0) {
+		return false;
+	}
+	int last_count = mc->piece_count;
+	bool same_cut = cut_pieces(sim, mc, last_count);
+	if (mc->piece_count == 0) {
+		return false;
+	}
+	/* Room for each piece: half as much again as it listed last time when the cut is the same
+	 * (a tree's node pairs change little from one listing to the next), else twice its share
+	 * of the last listing. */
+	for (int k = 0; k < mc->piece_count; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		int room = same_cut ? 64 + list->count + list->count / 2 : 64 + 2 * mc->last_listed / mc->piece_count;
+		if (list->capacity < room) {
+			contact_pair *bigger = plait_alloc_zero(a, (size_t)room, sizeof *bigger);
+			if (bigger == NULL) {
+				return false;
+			}
+			plait_free(a, list->pairs);
+			list->pairs = bigger;
+			list->capacity = room;
+		}
+	}
+	piece_job job = {sim, mc};
+	plait_parallel_for(&sim->parallel, list_pieces, &job, 0, mc->piece_count, 1);
+	int total = 0;
+	for (int k = 0; k < mc->piece_count; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		if (list->full) {
+			/* Again here, where its list may grow. */
+			list->count = 0;
+			pair_pass again = {.sim = sim,
+			                   .mc = mc,
+			                   .stage = STAGE_GATHER,
+			                   .out_pairs = &list->pairs,
+			                   .out_count = &list->count,
+			                   .out_capacity = &list->capacity};
+			list_piece(mc, &again, &mc->pieces[k]);
+			list->features_kept = again.features_kept;
+			list->features_left_out = again.features_left_out;
+		}
+		pass->features_kept += list->features_kept;
+		pass->features_left_out += list->features_left_out;
+		total += list->count;
+	}
+	if (total > mc->pair_capacity) {
+		contact_pair *bigger = plait_alloc_zero(a, (size_t)total, sizeof *bigger);
+		if (bigger == NULL) {
+			mc->out_of_memory = true;
+			return true;
+		}
+		plait_free(a, mc->pairs);
+		mc->pairs = bigger;
+		mc->pair_capacity = total;
+	}
+	mc->pair_count = 0;
+	for (int k = 0; k < mc->piece_count; ++k) {
+		const piece_list *list = &mc->piece_lists[k];
+		if (list->count > 0) {
+			memcpy(mc->pairs + mc->pair_count, list->pairs, sizeof *list->pairs * (size_t)list->count);
+			mc->pair_count += list->count;
+		}
+	}
+	return true;
 }
 
 /* The mean motion of each collision object from the gather positions to `x` (a particle
@@ -1769,7 +1985,7 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
 	const plait_particles *p = &sim->particles;
-	pair_pass pass = {sim, mc, STAGE_REST, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
+	pair_pass pass = {.sim = sim, .mc = mc, .stage = STAGE_REST};
 	for (int k = 0; k < mc->object_count && !pass.failed; ++k) {
 		collision_object *o = &mc->objects[k];
 		if (!o->self) {
@@ -1841,10 +2057,19 @@ static void gather(plait_sim *sim, plait_mesh_contacts *mc)
 			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
 		}
 	}
-	mc->features_kept = mc->features_left_out = 0;
 	fit_boxes(sim, mc, false, 0.0f);
-	pair_pass pass = {sim, mc, STAGE_GATHER, 0.0f, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
-	traverse_objects(mc, &pass);
+	pair_pass pass = {.sim = sim,
+	                  .mc = mc,
+	                  .stage = STAGE_GATHER,
+	                  .out_pairs = &mc->pairs,
+	                  .out_count = &mc->pair_count,
+	                  .out_capacity = &mc->pair_capacity};
+	if (!(sim->parallel.worker_count > 1 && gather_on_workers(sim, mc, &pass))) {
+		traverse_objects(mc, &pass);
+	}
+	mc->last_listed = mc->pair_count;
+	mc->features_kept = pass.features_kept;
+	mc->features_left_out = pass.features_left_out;
 	mc->list_valid = !mc->out_of_memory;
 }
 
@@ -2238,7 +2463,7 @@ static void forget_rest_bounds(plait_mesh_contacts *mc)
 
 static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
 {
-	pair_pass pass = {sim, mc, STAGE_FAILSAFE, distance, 0, 0.0f, 0.0f, false, 0, 0, NULL, false, 0};
+	pair_pass pass = {.sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = distance};
 	sweep_rest_pairs(&pass);
 	if (from_list) {
 		for (int k = 0; k < mc->pair_count; ++k) {
