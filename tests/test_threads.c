@@ -3,6 +3,7 @@
  * all run at once; results do not depend on the worker count; `plait run --threads`; and the
  * hang-128 example scene loads. */
 #include "cli.h"
+#include "collide_scenes.h"
 #include "scene.h"
 #include "test_cli.h"
 #include "test_support.h"
@@ -487,4 +488,63 @@ Test(threads, hang_128_example_scene_loads, .timeout = 300)
 	plait_destroy_world(world);
 	plait_scene_free(&scene);
 	plait_thread_pool_destroy(pool);
+}
+
+/* A collision scene's cloth positions after `frames` frames with worker_count workers. */
+static plait_vec3 *collide_scene_positions(collide_scene_kind kind, int n, int frames, int worker_count,
+                                           int *count)
+{
+	plait_thread_pool *pool = NULL;
+	plait_world_def wdef = plait_default_world_def();
+	if (worker_count > 1) {
+		pool = plait_thread_pool_create(worker_count);
+		cr_assert_not_null(pool);
+	}
+	plait_thread_pool_attach(pool, &wdef);
+	collide_scene scene;
+	plait_error error = {0};
+	cr_assert(collide_scene_create(&scene, kind, n, &wdef, &error), "%s", error.message);
+	for (int f = 0; f < frames; ++f) {
+		cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
+	}
+	*count = 0;
+	for (int c = 0; c < scene.cloth_count; ++c) {
+		*count += plait_object_get_vertex_count(scene.cloths[c]);
+	}
+	plait_vec3 *x = malloc(sizeof *x * (size_t)*count);
+	int at = 0;
+	for (int c = 0; c < scene.cloth_count; ++c) {
+		int vertices = plait_object_get_vertex_count(scene.cloths[c]);
+		cr_assert_eq(plait_object_get_positions(scene.cloths[c], 0, vertices, x + at, &error), PLAIT_OK, "%s",
+		             error.message);
+		at += vertices;
+	}
+	collide_scene_destroy(&scene);
+	plait_thread_pool_destroy(pool);
+	return x;
+}
+
+/* Mesh contacts list pairs and sweep them in the failsafe on the workers (mesh_contact.c,
+ * pieces joined in the traversal's order; crossings joined into impact zones in that order):
+ * the thin box (a sheet at 20 m/s onto 1 mm, where the failsafe acts in most frames) and the
+ * drape of two sheets give the same bits with 1, 2 and 8 workers. */
+Test(threads, collision_scenes_same_with_1_2_and_8_workers, .timeout = 600)
+{
+	collide_scene_kind kinds[2] = {SCENE_THIN_BOX, SCENE_DRAPE};
+	int frames[2] = {24, 40};
+	for (int k = 0; k < 2; ++k) {
+		int count1, count2, count8;
+		plait_vec3 *x1 = collide_scene_positions(kinds[k], 24, frames[k], 1, &count1);
+		plait_vec3 *x2 = collide_scene_positions(kinds[k], 24, frames[k], 2, &count2);
+		plait_vec3 *x8 = collide_scene_positions(kinds[k], 24, frames[k], 8, &count8);
+		cr_assert_eq(count1, count2);
+		cr_assert_eq(count1, count8);
+		cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0,
+		          "%s: 2 workers give other positions than 1", collide_scene_names[kinds[k]]);
+		cr_expect(memcmp(x1, x8, sizeof *x1 * (size_t)count1) == 0,
+		          "%s: 8 workers give other positions than 1", collide_scene_names[kinds[k]]);
+		free(x1);
+		free(x2);
+		free(x8);
+	}
 }

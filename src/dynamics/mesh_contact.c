@@ -86,6 +86,15 @@ typedef struct piece_list {
 	int features_kept, features_left_out;
 } piece_list;
 
+/* A crossing found by a failsafe sweep on a worker, joined into its impact zone afterwards on
+ * the calling thread, in the order the sweeps would have met it. */
+typedef struct sweep_hit {
+	int v[4];
+	int n;
+} sweep_hit;
+
+#define HIT_ROOM 4 /* crossings a piece of a sweep keeps; one that finds more (rare) is swept again */
+
 typedef struct plait_mesh_contacts {
 	int element_count;
 	element *elements;
@@ -126,6 +135,11 @@ typedef struct plait_mesh_contacts {
 	gather_piece *pieces;
 	piece_list *piece_lists;
 	int last_listed;
+	/* The failsafe's sweeps on the workers (sweep_on_workers): per piece, its crossings (room for
+	 * HIT_ROOM), how many, the pairs it swept, and whether it ran out of room. */
+	sweep_hit *piece_hits;
+	int *piece_hit_count, *piece_swept;
+	bool *piece_full;
 	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
 	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
 	 * long as no vertex is farther than its guard from where it was then (list_covers). */
@@ -499,6 +513,10 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	}
 	plait_free(a, mc->piece_lists);
 	plait_free(a, mc->pieces);
+	plait_free(a, mc->piece_hits);
+	plait_free(a, mc->piece_hit_count);
+	plait_free(a, mc->piece_swept);
+	plait_free(a, mc->piece_full);
 	plait_free(a, mc);
 	sim->mesh_contacts = NULL;
 }
@@ -667,6 +685,10 @@ typedef struct pair_pass {
 	int *out_count, *out_capacity;
 	bool fixed_capacity, full;
 	int features_kept, features_left_out; /* STAGE_GATHER: see plait_mesh_contacts */
+	/* STAGE_FAILSAFE on a worker: crossings go here (room for HIT_ROOM; `full` past it) instead
+	 * of into the impact zones. */
+	sweep_hit *hits_out;
+	int hits_count;
 } pair_pass;
 
 static bool shares_vertex(const int *v, int n)
@@ -801,7 +823,15 @@ static void sweep_pair(pair_pass *pass, int type, const int *v)
 	}
 	if (paths_meet(type, start, end, pass->failsafe_distance)) {
 		pass->hits += 1;
-		join_zone(pass->mc, v, n);
+		if (pass->hits_out == NULL) {
+			join_zone(pass->mc, v, n);
+		} else if (pass->hits_count == HIT_ROOM) {
+			pass->full = true;
+		} else {
+			sweep_hit *hit = &pass->hits_out[pass->hits_count++];
+			memcpy(hit->v, v, sizeof(int) * (size_t)n);
+			hit->n = n;
+		}
 	}
 }
 
@@ -1823,9 +1853,9 @@ static void list_pieces(void *context, int begin, int end)
 	}
 }
 
-/* Cuts the traversals into mc->pieces (piece_count 0 when they do not fit); returns whether
- * the cut is the one of the last listing, which had last_count pieces. */
-static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, int last_count)
+/* Cuts the traversals of stage `of` into mc->pieces (piece_count 0 when they do not fit); returns
+ * whether the cut is the one before, which had last_count pieces. */
+static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, stage of, int last_count)
 {
 	int(*nodes)[2] = plait_alloc_zero(&sim->allocator, MAX_PIECES, sizeof *nodes);
 	if (nodes == NULL) {
@@ -1840,7 +1870,7 @@ static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, int last_c
 			if ((a == b && !oa->self) || (a != b && !objects_meet(sim, mc, a, b))) {
 				continue;
 			}
-			pair_pass margin_pass = {.stage = STAGE_GATHER};
+			pair_pass margin_pass = {.stage = of};
 			int n = plait_element_tree_split(&oa->tree, &ob->tree, a == b,
 			                                 a == b ? 0.0f : listing_margin(mc, &margin_pass, a, b),
 			                                 PIECE_DEPTH, nodes, MAX_PIECES - count);
@@ -1876,12 +1906,14 @@ static bool gather_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass
 		}
 	}
 	/* The first listing, with nothing to size the pieces' lists by, runs on the calling thread
-	 * (most pieces would fill their room and be listed twice). */
-	if (mc->last_listed == 0) {
+	 * (most pieces would fill their room and be listed twice); so does a listing much longer
+	 * than the traversal that makes it (pile: about 50 pairs an element, against 8 in
+	 * hang-self), where joining the pieces' lists costs more than a worker saves. */
+	if (mc->last_listed == 0 || mc->last_listed > 16 * mc->element_count) {
 		return false;
 	}
 	int last_count = mc->piece_count;
-	bool same_cut = cut_pieces(sim, mc, last_count);
+	bool same_cut = cut_pieces(sim, mc, STAGE_GATHER, last_count);
 	if (mc->piece_count == 0) {
 		return false;
 	}
@@ -2461,21 +2493,129 @@ static void forget_rest_bounds(plait_mesh_contacts *mc)
 	}
 }
 
+/* The listed pairs [begin, end) that may have come within the distance, swept. */
+static void sweep_listed(plait_mesh_contacts *mc, pair_pass *pass, int begin, int end)
+{
+	for (int k = begin; k < end; ++k) {
+		if (mc->pairs[k].lower <= pass->failsafe_distance) {
+			sweep_pair(pass, mc->pairs[k].type, mc->pairs[k].v);
+		}
+	}
+}
+
+typedef struct sweep_job {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+	float distance;
+	bool from_list;
+	int chunk; /* from_list: listed pairs a piece */
+} sweep_job;
+
+/* Piece k of a sweep: listed pairs [k chunk, (k + 1) chunk), or piece k of the traversal. */
+static void sweep_piece(const sweep_job *job, pair_pass *pass, int k)
+{
+	plait_mesh_contacts *mc = job->mc;
+	if (job->from_list) {
+		int begin = k * job->chunk,
+		    end = begin + job->chunk < mc->pair_count ? begin + job->chunk : mc->pair_count;
+		sweep_listed(mc, pass, begin, end);
+	} else {
+		list_piece(mc, pass, &mc->pieces[k]);
+	}
+}
+
+static void sweep_pieces(void *context, int begin, int end)
+{
+	const sweep_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	for (int k = begin; k < end; ++k) {
+		pair_pass pass = {.sim = job->sim,
+		                  .mc = mc,
+		                  .stage = STAGE_FAILSAFE,
+		                  .failsafe_distance = job->distance,
+		                  .hits_out = mc->piece_hits + (size_t)k * HIT_ROOM};
+		sweep_piece(job, &pass, k);
+		mc->piece_hit_count[k] = pass.hits_count;
+		mc->piece_swept[k] = pass.swept;
+		mc->piece_full[k] = pass.full;
+	}
+}
+
+/* The failsafe's sweep of the listed pairs (from_list) or its traversal, on the workers: each
+ * piece keeps its crossings, which then join their impact zones here in piece order, the order
+ * one thread meets them in (a piece that found too many is swept again here). Adds to pass's
+ * hits and swept counts; false (nothing swept) when it cannot run there. */
+static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass, bool from_list)
+{
+	const plait_allocator *a = &sim->allocator;
+	if (mc->pieces == NULL || mc->piece_hits == NULL) {
+		if (mc->pieces == NULL) {
+			mc->pieces = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->pieces);
+			mc->piece_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_lists);
+		}
+		mc->piece_hits = plait_alloc_zero(a, (size_t)MAX_PIECES * HIT_ROOM, sizeof *mc->piece_hits);
+		mc->piece_hit_count = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
+		mc->piece_swept = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
+		mc->piece_full = plait_alloc_zero(a, MAX_PIECES, sizeof(bool));
+		if (mc->pieces == NULL || mc->piece_lists == NULL || mc->piece_hits == NULL ||
+		    mc->piece_hit_count == NULL || mc->piece_swept == NULL || mc->piece_full == NULL) {
+			plait_free(a, mc->piece_hits);
+			mc->piece_hits = NULL;
+			return false;
+		}
+	}
+	sweep_job job = {sim, mc, pass->failsafe_distance, from_list, 0};
+	int pieces;
+	if (from_list) {
+		job.chunk = 4096;
+		if (mc->pair_count > job.chunk * MAX_PIECES) {
+			job.chunk = (mc->pair_count + MAX_PIECES - 1) / MAX_PIECES;
+		}
+		pieces = (mc->pair_count + job.chunk - 1) / job.chunk;
+	} else {
+		/* The traversal's boxes are fitted to the paths: a cut of its own. */
+		(void)cut_pieces(sim, mc, STAGE_FAILSAFE, 0);
+		pieces = mc->piece_count;
+		if (pieces == 0) {
+			return false;
+		}
+	}
+	plait_parallel_for(&sim->parallel, sweep_pieces, &job, 0, pieces, 1);
+	for (int k = 0; k < pieces; ++k) {
+		if (mc->piece_full[k]) {
+			pair_pass again = {
+			    .sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = job.distance};
+			sweep_piece(&job, &again, k);
+			pass->hits += again.hits;
+			pass->swept += again.swept;
+			continue;
+		}
+		const sweep_hit *hits = mc->piece_hits + (size_t)k * HIT_ROOM;
+		for (int h = 0; h < mc->piece_hit_count[k]; ++h) {
+			join_zone(mc, hits[h].v, hits[h].n);
+		}
+		pass->hits += mc->piece_hit_count[k];
+		pass->swept += mc->piece_swept[k];
+	}
+	return true;
+}
+
 static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
 {
 	pair_pass pass = {.sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = distance};
 	sweep_rest_pairs(&pass);
 	if (from_list) {
-		for (int k = 0; k < mc->pair_count; ++k) {
-			if (mc->pairs[k].lower <= distance) {
-				sweep_pair(&pass, mc->pairs[k].type, mc->pairs[k].v);
-			}
+		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, true))) {
+			sweep_listed(mc, &pass, 0, mc->pair_count);
 		}
 		return pass.hits;
 	}
 	fit_boxes(sim, mc, true, distance);
-	traverse_objects(mc, &pass);
-	mc->traversal_sweeps = pass.swept;
+	int before = pass.swept;
+	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {
+		traverse_objects(mc, &pass);
+	}
+	mc->traversal_sweeps = pass.swept - before;
 	return pass.hits;
 }
 
