@@ -16,7 +16,7 @@ typedef struct distance_job {
 	plait_distance_block *block;
 	plait_point *points;
 	float inverse_h_squared;
-	bool backward;
+	plait_sweep sweep;
 } distance_job;
 
 /* Constraints [begin, end) of one run: they share no particle. */
@@ -26,109 +26,71 @@ static void distance_range(void *context, int begin, int end)
 	job->kernel(job->block, job->points, begin, end, job->inverse_h_squared);
 }
 
-/* Regions [first, last), each swept run after run on one thread. */
+/* Regions [first, last), each swept run after run on one thread: forward, backward, or
+ * (symmetric) forward and straight back while it is in cache. */
 static void distance_regions(void *context, int first, int last)
 {
 	distance_job *job = context;
 	const plait_colouring *colouring = &job->block->colouring;
 	for (int r = first; r < last; ++r) {
 		int run_first = colouring->region_start[r], run_last = colouring->region_start[r + 1];
-		for (int k = run_first; k < run_last; ++k) {
-			int run = job->backward ? run_first + run_last - 1 - k : k;
-			distance_range(job, colouring->run_start[run], colouring->run_start[run + 1]);
+		if (job->sweep != PLAIT_SWEEP_BACKWARD) {
+			for (int k = run_first; k < run_last; ++k) {
+				distance_range(job, colouring->run_start[k], colouring->run_start[k + 1]);
+			}
+		}
+		if (job->sweep != PLAIT_SWEEP_FORWARD) {
+			for (int k = run_last - 1; k >= run_first; --k) {
+				distance_range(job, colouring->run_start[k], colouring->run_start[k + 1]);
+			}
 		}
 	}
 }
 
-/* Regions [first, last), each swept forward then backward while it is in cache. */
-static void distance_regions_there_and_back(void *context, int first, int last)
-{
-	distance_job *job = context;
-	const plait_colouring *colouring = &job->block->colouring;
-	for (int r = first; r < last; ++r) {
-		int run_first = colouring->region_start[r], run_last = colouring->region_start[r + 1];
-		for (int k = run_first; k < run_last; ++k) {
-			distance_range(job, colouring->run_start[k], colouring->run_start[k + 1]);
-		}
-		for (int k = run_last - 1; k >= run_first; --k) {
-			distance_range(job, colouring->run_start[k], colouring->run_start[k + 1]);
-		}
-	}
-}
-
-/* One sweep, forward or backward: the regions side by side, then the boundary's runs one after
- * another (each split over the workers), then what is not coloured yet one by one; backward
- * goes the other way. */
-static void sweep_distance(plait_parallel *parallel, distance_job *job)
+/* The boundary's runs one after another (each split over the workers), then what is not
+ * coloured yet one by one; backward the other way. */
+static void sweep_boundary(plait_parallel *parallel, distance_job *job, bool backward)
 {
 	plait_distance_block *block = job->block;
 	const plait_colouring *colouring = &block->colouring;
 	int coloured = plait_colouring_end(colouring);
 	int boundary_first = colouring->run_count > 0 ? colouring->region_start[colouring->region_count] : 0;
-	if (!job->backward) {
-		plait_parallel_for(parallel, distance_regions, job, 0, colouring->region_count, 1);
-		for (int k = boundary_first; k < colouring->run_count; ++k) {
-			plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
-			                   colouring->run_start[k + 1], DISTANCE_GRAIN);
-		}
-		for (int c = coloured; c < block->count; ++c) {
-			plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
-		}
-	} else {
-		for (int c = block->count - 1; c >= coloured; --c) {
-			plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
-		}
-		for (int k = colouring->run_count - 1; k >= boundary_first; --k) {
-			plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
-			                   colouring->run_start[k + 1], DISTANCE_GRAIN);
-		}
-		plait_parallel_for(parallel, distance_regions, job, 0, colouring->region_count, 1);
+	int runs = colouring->run_count - boundary_first, loose = block->count - coloured;
+	for (int m = 0; !backward && m < runs; ++m) {
+		int k = boundary_first + m;
+		plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
+		                   colouring->run_start[k + 1], DISTANCE_GRAIN);
+	}
+	for (int m = 0; m < loose; ++m) {
+		int c = backward ? block->count - 1 - m : coloured + m;
+		plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
+	}
+	for (int m = 0; backward && m < runs; ++m) {
+		int k = colouring->run_count - 1 - m;
+		plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
+		                   colouring->run_start[k + 1], DISTANCE_GRAIN);
 	}
 }
 
-/* A symmetric sweep: the same projections as a forward sweep then a backward one, ordered so
- * that each region is swept back right after it was swept forward, while its constraints and
- * points are in cache (at hang-512, whose blocks overflow the last-level cache, that was 12% of
- * the frame). The order stays a palindrome, the boundary's runs forward, then every region there
- * and back, then the boundary's runs backward, so the sweep stays symmetric (architecture.md,
+/* A forward sweep goes through the regions side by side, then the boundary; a backward one the
+ * other way. A symmetric sweep does the same projections as a forward sweep then a backward
+ * one, ordered so that each region is swept back right after it was swept forward, while its
+ * constraints and points are in cache (at hang-512, whose blocks overflow the last-level cache,
+ * that was 12% of the frame): the boundary forward, every region there and back, the boundary
+ * backward. The order stays a palindrome, so the sweep stays symmetric (architecture.md,
  * "Symmetric sweeps"). */
-static void sweep_there_and_back(plait_parallel *parallel, distance_job *job)
-{
-	plait_distance_block *block = job->block;
-	const plait_colouring *colouring = &block->colouring;
-	int coloured = plait_colouring_end(colouring);
-	int boundary_first = colouring->run_count > 0 ? colouring->region_start[colouring->region_count] : 0;
-	for (int k = boundary_first; k < colouring->run_count; ++k) {
-		plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
-		                   colouring->run_start[k + 1], DISTANCE_GRAIN);
-	}
-	for (int c = coloured; c < block->count; ++c) {
-		plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
-	}
-	plait_parallel_for(parallel, distance_regions_there_and_back, job, 0, colouring->region_count, 1);
-	for (int c = block->count - 1; c >= coloured; --c) {
-		plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
-	}
-	for (int k = colouring->run_count - 1; k >= boundary_first; --k) {
-		plait_parallel_for(parallel, distance_range, job, colouring->run_start[k],
-		                   colouring->run_start[k + 1], DISTANCE_GRAIN);
-	}
-}
-
 void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
                           plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel)
 {
-	distance_job job = {kernel, block, particles->point, inverse_h_squared, false};
-	if (sweep == PLAIT_SWEEP_SYMMETRIC) {
-		sweep_there_and_back(parallel, &job);
-		return;
-	}
-	if (sweep != PLAIT_SWEEP_BACKWARD) {
-		sweep_distance(parallel, &job);
-	}
+	distance_job job = {kernel, block, particles->point, inverse_h_squared, sweep};
+	const plait_colouring *colouring = &block->colouring;
 	if (sweep != PLAIT_SWEEP_FORWARD) {
-		job.backward = true;
-		sweep_distance(parallel, &job);
+		/* Backward, or the symmetric sweep's first half. */
+		sweep_boundary(parallel, &job, sweep == PLAIT_SWEEP_BACKWARD);
+	}
+	plait_parallel_for(parallel, distance_regions, &job, 0, colouring->region_count, 1);
+	if (sweep != PLAIT_SWEEP_BACKWARD) {
+		sweep_boundary(parallel, &job, sweep == PLAIT_SWEEP_SYMMETRIC);
 	}
 }
 
@@ -329,7 +291,7 @@ static void bend_regions(void *context, int first, int last)
 	}
 }
 
-/* Forward only, in the order of sweep_distance. */
+/* Forward only, in the order of a forward distance sweep. */
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
                       plait_bend_kernel *kernel, plait_parallel *parallel)
 {
