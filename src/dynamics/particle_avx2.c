@@ -157,18 +157,16 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	_mm256_zeroupper();
 }
 
-void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
+void plait_step_particles_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end,
+                               bool ending, bool beginning)
 {
-	step_range(k, p, begin, end, true, true);
-}
-
-void plait_end_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
-{
-	step_range(k, p, begin, end, true, false);
-}
-
-void plait_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end)
-{
-	step_range(k, p, begin, end, false, true);
+	/* One copy per combination, each without the tests of the others. */
+	if (ending && beginning) {
+		step_range(k, p, begin, end, true, true);
+	} else if (ending) {
+		step_range(k, p, begin, end, true, false);
+	} else if (beginning) {
+		step_range(k, p, begin, end, false, true);
+	}
 }
 #endif

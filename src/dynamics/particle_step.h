@@ -63,12 +63,10 @@ static inline void plait_end_particle(const plait_particle_step *k, plait_partic
 	p->v[i] = v;
 }
 
-/* The end of a substep and the start of the next for particles [begin, end), as
- * plait_end_particle then plait_begin_particle for each, without air (k->air false), eight at
- * a time. Only call when the processor runs AVX2 (plait_simd_supported). */
-void plait_end_and_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end);
-/* The end of a substep alone, and the start of one alone (without air), likewise. */
-void plait_end_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end);
-void plait_begin_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end);
+/* The end of a substep (with `ending`: plait_end_particle) and the start of the next (with
+ * `beginning`: plait_begin_particle, without air) for particles [begin, end), eight at a time,
+ * to the same bits. Only call when the processor runs AVX2 (plait_simd_supported). */
+void plait_step_particles_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end,
+                               bool ending, bool beginning);
 
 #endif

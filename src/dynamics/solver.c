@@ -90,59 +90,47 @@ static plait_particle_step step_of(const particle_job *job)
 	                             job->air,   job->sim->materials};
 }
 
-static void begin_substep_range(void *context, int begin, int end)
+/* The end of a substep (`ending`: the velocity update) and the start of the next (`beginning`:
+ * gravity, damping, prediction) for particles [begin, end), one or both. Both in one pass when
+ * nothing runs between them that reads or writes the particles (no air, no particle-pair
+ * restitution): the same operations per particle, in the same order, with its data read once.
+ * Air's own velocity integration comes first in a start and keeps the portable loop. */
+static inline void step_particles(const particle_job *job, int begin, int end, bool ending, bool beginning)
 {
-	const particle_job *job = context;
-	if (job->air) {
+	if (beginning && job->air) {
 		plait_integrate_velocities(job->sim, job->h, true, begin, end);
 	}
 	plait_particle_step k = step_of(job);
 	plait_particles *p = &job->sim->particles;
 #if PLAIT_X86_KERNELS
-	if (job->sim->simd != PLAIT_SIMD_SCALAR && !job->air) {
-		plait_begin_avx2(&k, p, begin, end);
+	if (job->sim->simd != PLAIT_SIMD_SCALAR && !(beginning && job->air)) {
+		plait_step_particles_avx2(&k, p, begin, end, ending, beginning);
 		return;
 	}
 #endif
 	for (int i = begin; i < end; ++i) {
-		plait_begin_particle(&k, p, i);
+		if (ending) {
+			plait_end_particle(&k, p, i);
+		}
+		if (beginning) {
+			plait_begin_particle(&k, p, i);
+		}
 	}
+}
+
+static void begin_substep_range(void *context, int begin, int end)
+{
+	step_particles(context, begin, end, false, true);
 }
 
 static void end_substep_range(void *context, int begin, int end)
 {
-	const particle_job *job = context;
-	plait_particle_step k = step_of(job);
-	plait_particles *p = &job->sim->particles;
-#if PLAIT_X86_KERNELS
-	if (job->sim->simd != PLAIT_SIMD_SCALAR) {
-		plait_end_avx2(&k, p, begin, end);
-		return;
-	}
-#endif
-	for (int i = begin; i < end; ++i) {
-		plait_end_particle(&k, p, i);
-	}
+	step_particles(context, begin, end, true, false);
 }
 
-/* The end of one substep and the start of the next in one pass over the particles, when
- * nothing runs between them that reads or writes them (no air, no particle-pair restitution):
- * the same operations per particle, in the same order, with the particle's data read once. */
 static void end_and_begin_range(void *context, int begin, int end)
 {
-	const particle_job *job = context;
-	plait_particle_step k = step_of(job);
-	plait_particles *p = &job->sim->particles;
-#if PLAIT_X86_KERNELS
-	if (job->sim->simd != PLAIT_SIMD_SCALAR) {
-		plait_end_and_begin_avx2(&k, p, begin, end);
-		return;
-	}
-#endif
-	for (int i = begin; i < end; ++i) {
-		plait_end_particle(&k, p, i);
-		plait_begin_particle(&k, p, i);
-	}
+	step_particles(context, begin, end, true, true);
 }
 
 static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, plait_sweep sweep)
