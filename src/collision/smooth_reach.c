@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "collision/closest.h"
+#include "topology/topology.h"
 
 /* Radians: a face this steep against a feature's reference normal ends its smooth reach. */
 #define SMOOTH_STEEPEST 1.0f
@@ -166,32 +167,11 @@ static vec3 reference_normal(vec3 sum, int count)
 	return length > 0.5f * (float)count ? v3_scale(sum, 1.0f / length) : v3(0.0f, 0.0f, 0.0f);
 }
 
-/* An edge of a triangle, by its vertices in order: sorted, the triangles sharing an edge are
- * neighbours. */
-typedef struct mesh_edge {
-	int low, high, triangle, k;
-} mesh_edge;
-
-static int compare_mesh_edges(const void *a, const void *b)
-{
-	const mesh_edge *x = a, *y = b;
-	if (x->low != y->low) {
-		return x->low < y->low ? -1 : 1;
-	}
-	if (x->high != y->high) {
-		return x->high < y->high ? -1 : 1;
-	}
-	if (x->triangle != y->triangle) {
-		return x->triangle < y->triangle ? -1 : 1;
-	}
-	return x->k < y->k ? -1 : x->k > y->k;
-}
-
 bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *a, float budget,
                                float range, float *vertex_reach_out, float *edge_reach_out)
 {
 	int nt = shape->triangle_count, nv = shape->vertex_count;
-	mesh_edge *edges = plait_alloc(a, sizeof *edges * (size_t)(3 * nt));
+	plait_triangle_edge *edges = plait_alloc(a, sizeof *edges * (size_t)(3 * nt));
 	int *edge_of = plait_alloc(a, sizeof(int) * (size_t)(3 * nt)); /* (t, k) -> first key of its run */
 	bool *open = plait_alloc_zero(a, (size_t)nt, sizeof(bool));
 	float *edge_reach = plait_alloc(a, sizeof(float) * (size_t)(3 * nt));
@@ -206,12 +186,12 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 		for (int t = 0; t < nt; ++t) {
 			for (int k = 0; k < 3; ++k) {
 				int i = shape->triangles[t][k], j = shape->triangles[t][(k + 1) % 3];
-				edges[3 * t + k] = (mesh_edge){i < j ? i : j, i < j ? j : i, t, k};
+				edges[3 * t + k] = (plait_triangle_edge){i < j ? i : j, i < j ? j : i, t, k};
 				vertex_normal[i] = v3_add(vertex_normal[i], shape->normals[t]);
 				star[i] += 1;
 			}
 		}
-		qsort(edges, (size_t)(3 * nt), sizeof *edges, compare_mesh_edges);
+		plait_sort_triangle_edges(edges, 3 * nt);
 		for (int start = 0; start < 3 * nt;) {
 			int end = start + 1;
 			while (end < 3 * nt && edges[end].low == edges[start].low &&
@@ -219,7 +199,7 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 				++end;
 			}
 			for (int k = start; k < end; ++k) {
-				edge_of[3 * edges[k].triangle + edges[k].k] = start;
+				edge_of[3 * edges[k].triangle + edges[k].corner] = start;
 				open[edges[k].triangle] = open[edges[k].triangle] || end - start != 2;
 			}
 			start = end;

@@ -9,6 +9,7 @@
 #include "collision/mesh_shape.h"
 #include "collision/smooth_reach.h"
 #include "dynamics/contact.h"
+#include "topology/topology.h"
 
 /* Primitive pairs. The first primitive's vertices come first in v[]. */
 typedef enum pair_type {
@@ -161,25 +162,6 @@ typedef struct plait_mesh_contacts {
 
 /* ---- Building the elements --------------------------------------------------------------- */
 
-typedef struct edge_key {
-	int low, high, element, k;
-} edge_key;
-
-static int compare_edges(const void *a, const void *b)
-{
-	const edge_key *x = a, *y = b;
-	if (x->low != y->low) {
-		return x->low < y->low ? -1 : 1;
-	}
-	if (x->high != y->high) {
-		return x->high < y->high ? -1 : 1;
-	}
-	if (x->element != y->element) {
-		return x->element < y->element ? -1 : 1;
-	}
-	return x->k < y->k ? -1 : x->k > y->k;
-}
-
 static void free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
 {
 	plait_free(a, mc->elements);
@@ -228,7 +210,7 @@ static bool material_collides(const plait_sim *sim, int material)
 }
 
 static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc);
-static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, const edge_key *edges,
+static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, const plait_triangle_edge *edges,
                                     int edge_count);
 
 static bool excluded(const plait_mesh_contacts *mc, int a, int b)
@@ -292,7 +274,8 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->shapes = plait_alloc_zero(a, (size_t)count, sizeof *mc->shapes);
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
-	edge_key *edges = plait_alloc_zero(a, (size_t)(triangles > 0 ? 3 * triangles : 1), sizeof *edges);
+	plait_triangle_edge *edges =
+	    plait_alloc_zero(a, (size_t)(triangles > 0 ? 3 * triangles : 1), sizeof *edges);
 	bool *owned = plait_alloc_zero(a, (size_t)p->count, sizeof(bool));
 	/* At most one object per surface, per chain and per particle run. */
 	mc->objects =
@@ -321,7 +304,7 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				}
 				for (int k = 0; k < 3; ++k) {
 					int i = el->v[k], j = el->v[(k + 1) % 3];
-					edges[edge_count++] = (edge_key){i < j ? i : j, i < j ? j : i, e, k};
+					edges[edge_count++] = (plait_triangle_edge){i < j ? i : j, i < j ? j : i, e, k};
 					if (!owned[i]) {
 						owned[i] = true;
 						el->own_vertices |= (uint8_t)(1u << k);
@@ -367,12 +350,10 @@ static bool build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				el->own_vertices = 1;
 			}
 		}
-		if (edge_count > 0) {
-			qsort(edges, (size_t)edge_count, sizeof *edges, compare_edges);
-		}
+		plait_sort_triangle_edges(edges, edge_count);
 		for (int k = 0; k < edge_count; ++k) {
 			if (k == 0 || edges[k].low != edges[k - 1].low || edges[k].high != edges[k - 1].high) {
-				mc->elements[edges[k].element].own_edges |= (uint8_t)(1u << edges[k].k);
+				mc->elements[edges[k].triangle].own_edges |= (uint8_t)(1u << edges[k].corner);
 			}
 		}
 		mc->element_count = count;
@@ -1267,7 +1248,7 @@ static bool meets_collider_surfaces(const plait_sim *sim, const plait_mesh_conta
 /* The smooth reaches of every rigid mesh collider's corners and edges (see above), from the
  * current shapes: the contact distance from the thinnest cloth or curve that meets them, the
  * range from their longest edge. Colliders with nothing to leave out (boxes) keep features -1. */
-static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, const edge_key *edges,
+static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, const plait_triangle_edge *edges,
                                     int edge_count)
 {
 	const plait_particles *p = &sim->particles;
@@ -1355,10 +1336,10 @@ static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, con
 		mc->neighbours[e][0] = mc->neighbours[e][1] = mc->neighbours[e][2] = -1;
 	}
 	for (int k = 0; k + 1 < edge_count; ++k) {
-		const edge_key *x = &edges[k], *y = &edges[k + 1];
+		const plait_triangle_edge *x = &edges[k], *y = &edges[k + 1];
 		if (x->low == y->low && x->high == y->high) {
-			mc->neighbours[x->element][x->k] = y->element;
-			mc->neighbours[y->element][y->k] = x->element;
+			mc->neighbours[x->triangle][x->corner] = y->triangle;
+			mc->neighbours[y->triangle][y->corner] = x->triangle;
 		}
 	}
 	return true;

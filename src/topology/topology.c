@@ -5,29 +5,6 @@
 
 #include "core/error.h"
 
-/* One (edge, triangle) incidence, sorted by edge to find unique edges and their parents. */
-typedef struct edge_record {
-	int a, b;     /* a < b */
-	int triangle; /* parent triangle */
-	int corner;   /* edge is triangle corner k -> k+1 */
-	uint8_t flags;
-} edge_record;
-
-static int compare_edge_records(const void *left, const void *right)
-{
-	const edge_record *l = left, *r = right;
-	if (l->a != r->a) {
-		return l->a < r->a ? -1 : 1;
-	}
-	if (l->b != r->b) {
-		return l->b < r->b ? -1 : 1;
-	}
-	if (l->triangle != r->triangle) {
-		return l->triangle < r->triangle ? -1 : 1;
-	}
-	return l->corner - r->corner;
-}
-
 void plait_topology_destroy(plait_topology *t, const plait_allocator *allocator)
 {
 	plait_free(allocator, t->polygon_sizes);
@@ -111,10 +88,16 @@ plait_result plait_topology_build(plait_topology *t, const plait_allocator *allo
 		ok = ok && t->polygon_sizes && t->polygon_starts && t->polygon_indices && t->triangles &&
 		     t->triangle_polygon && t->triangle_edges;
 	}
-	edge_record *records =
+	/* Each triangle edge, sorted by edge to find unique edges and their parents, and whether
+	 * it lies on its polygon's border (at triangle * 3 + corner). */
+	plait_triangle_edge *records =
 	    triangle_count > 0 ? plait_alloc_zero(allocator, (size_t)triangle_count * 3, sizeof *records) : NULL;
-	if (!ok || (triangle_count > 0 && records == NULL)) {
+	uint8_t *record_flags =
+	    triangle_count > 0 ? plait_alloc_zero(allocator, (size_t)triangle_count * 3, sizeof *record_flags)
+	                       : NULL;
+	if (!ok || (triangle_count > 0 && (records == NULL || record_flags == NULL))) {
 		plait_free(allocator, records);
+		plait_free(allocator, record_flags);
 		plait_topology_destroy(t, allocator);
 		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building a mesh of %d faces",
 		                       face_count);
@@ -138,24 +121,18 @@ plait_result plait_topology_build(plait_topology *t, const plait_allocator *allo
 				/* Corner pairs (0,1) with k == 1, (1,2) always, and (2,0) with k == size-2 are
 				 * polygon edges; the rest are fan diagonals. */
 				bool polygon_edge = (c == 1) || (c == 0 && k == 1) || (c == 2 && k + 2 == size);
-				edge_record *r = &records[triangle * 3 + c];
-				r->a = u < v ? u : v;
-				r->b = u < v ? v : u;
-				r->triangle = triangle;
-				r->corner = c;
-				r->flags = polygon_edge ? PLAIT_EDGE_POLYGON : PLAIT_EDGE_DIAGONAL;
+				records[triangle * 3 + c] = (plait_triangle_edge){u < v ? u : v, u < v ? v : u, triangle, c};
+				record_flags[triangle * 3 + c] = polygon_edge ? PLAIT_EDGE_POLYGON : PLAIT_EDGE_DIAGONAL;
 			}
 		}
 		start += size;
 	}
 
 	int record_count = triangle_count * 3;
-	if (record_count > 0) {
-		qsort(records, (size_t)record_count, sizeof *records, compare_edge_records);
-	}
+	plait_sort_triangle_edges(records, record_count);
 	int edge_count = 0;
 	for (int i = 0; i < record_count; ++i) {
-		if (i == 0 || records[i].a != records[i - 1].a || records[i].b != records[i - 1].b) {
+		if (i == 0 || records[i].low != records[i - 1].low || records[i].high != records[i - 1].high) {
 			++edge_count;
 		}
 	}
@@ -167,25 +144,27 @@ plait_result plait_topology_build(plait_topology *t, const plait_allocator *allo
 		t->edge_triangle_count = plait_alloc_zero(allocator, (size_t)edge_count, sizeof(int));
 		if (!t->edges || !t->edge_flags || !t->edge_triangles || !t->edge_triangle_count) {
 			plait_free(allocator, records);
+			plait_free(allocator, record_flags);
 			plait_topology_destroy(t, allocator);
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building mesh edges");
 		}
 	}
 	int edge = -1;
 	for (int i = 0; i < record_count; ++i) {
-		const edge_record *r = &records[i];
-		if (i == 0 || r->a != records[i - 1].a || r->b != records[i - 1].b) {
+		const plait_triangle_edge *r = &records[i];
+		if (i == 0 || r->low != records[i - 1].low || r->high != records[i - 1].high) {
 			++edge;
-			t->edges[edge][0] = r->a;
-			t->edges[edge][1] = r->b;
+			t->edges[edge][0] = r->low;
+			t->edges[edge][1] = r->high;
 			t->edge_triangles[edge][0] = -1;
 			t->edge_triangles[edge][1] = -1;
-			t->vertex_valence[r->a] += 1;
-			t->vertex_valence[r->b] += 1;
+			t->vertex_valence[r->low] += 1;
+			t->vertex_valence[r->high] += 1;
 		}
 		/* A polygon edge anywhere makes the edge structural. */
-		if (r->flags == PLAIT_EDGE_POLYGON || t->edge_flags[edge] == 0) {
-			t->edge_flags[edge] = r->flags;
+		uint8_t flags = record_flags[r->triangle * 3 + r->corner];
+		if (flags == PLAIT_EDGE_POLYGON || t->edge_flags[edge] == 0) {
+			t->edge_flags[edge] = flags;
 		}
 		int parents = t->edge_triangle_count[edge]++;
 		if (parents < 2) {
@@ -194,6 +173,7 @@ plait_result plait_topology_build(plait_topology *t, const plait_allocator *allo
 		t->triangle_edges[r->triangle][r->corner] = edge;
 	}
 	plait_free(allocator, records);
+	plait_free(allocator, record_flags);
 	return PLAIT_OK;
 }
 
@@ -227,4 +207,26 @@ int plait_topology_border_edge_count(const plait_topology *t)
 		count += t->edge_triangle_count[e] == 1;
 	}
 	return count;
+}
+
+static int compare_triangle_edges(const void *left, const void *right)
+{
+	const plait_triangle_edge *l = left, *r = right;
+	if (l->low != r->low) {
+		return l->low < r->low ? -1 : 1;
+	}
+	if (l->high != r->high) {
+		return l->high < r->high ? -1 : 1;
+	}
+	if (l->triangle != r->triangle) {
+		return l->triangle < r->triangle ? -1 : 1;
+	}
+	return l->corner < r->corner ? -1 : l->corner > r->corner;
+}
+
+void plait_sort_triangle_edges(plait_triangle_edge *edges, int count)
+{
+	if (count > 1) {
+		qsort(edges, (size_t)count, sizeof *edges, compare_triangle_edges);
+	}
 }

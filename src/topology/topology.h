@@ -55,4 +55,14 @@ int plait_topology_find_edge(const plait_topology *topology, int a, int b);
 /* Number of border edges (edges with one parent triangle). */
 int plait_topology_border_edge_count(const plait_topology *topology);
 
+/* One edge of a triangle: edge low-high (low < high) is the triangle's corner `corner` to
+ * corner + 1. `triangle` is the caller's number for it (a triangle, or an element holding
+ * one). Sorted by edge, then triangle and corner, the triangles sharing an edge come together in
+ * a fixed order: how neighbours and edge owners are found from a list of triangles. */
+typedef struct plait_triangle_edge {
+	int low, high, triangle, corner;
+} plait_triangle_edge;
+
+void plait_sort_triangle_edges(plait_triangle_edge *edges, int count);
+
 #endif
