@@ -1236,6 +1236,17 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 	return ok;
 }
 
+/* The square of an element's longest edge now (a segment's length; 0 for a point). */
+static float longest_edge_sq(const plait_particles *p, const element *el)
+{
+	float longest = 0.0f;
+	for (int m = 0; m < el->size; ++m) {
+		vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
+		longest = plait_maxf(longest, v3_length_sq(d));
+	}
+	return longest;
+}
+
 /* Whether an object's cloth triangles or curve segments meet colliders' surfaces here. */
 static bool meets_collider_surfaces(const plait_sim *sim, const plait_mesh_contacts *mc,
                                     const collision_object *o)
@@ -1260,9 +1271,8 @@ static bool build_collider_features(plait_sim *sim, plait_mesh_contacts *mc, con
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
 			const element *el = &mc->elements[e];
+			longest = plait_maxf(longest, sqrtf(longest_edge_sq(p, el)));
 			for (int m = 0; m < el->size; ++m) {
-				vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
-				longest = plait_maxf(longest, v3_length(d));
 				thinnest = plait_minf(thinnest, p->radius[el->v[m]]);
 			}
 		}
@@ -1361,12 +1371,7 @@ static void measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, f
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
 			const element *el = &mc->elements[e];
-			float edge_sq = 0.0f;
-			for (int m = 0; m < el->size; ++m) {
-				vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
-				edge_sq = plait_maxf(edge_sq, v3_length_sq(d));
-			}
-			mc->pair_reach[e] = slack * sqrtf(edge_sq);
+			mc->pair_reach[e] = slack * sqrtf(longest_edge_sq(p, el));
 		}
 		if (slack > 1.0f) {
 			for (int e = o->first; e < o->first + o->count; ++e) {
@@ -1400,12 +1405,8 @@ static bool cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_con
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
 			const element *el = &mc->elements[e];
-			float bound_sq = mc->cloth_bound[e] * mc->cloth_bound[e];
-			for (int m = 0; m < el->size; ++m) {
-				vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
-				if (v3_length_sq(d) > bound_sq) {
-					return false;
-				}
+			if (longest_edge_sq(p, el) > mc->cloth_bound[e] * mc->cloth_bound[e]) {
+				return false;
 			}
 		}
 	}
