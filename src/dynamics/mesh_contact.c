@@ -135,6 +135,7 @@ typedef struct plait_mesh_contacts {
 	 * length of the last list (to size the pieces' lists). */
 	int piece_count;
 	gather_piece *pieces;
+	int (*piece_nodes)[2]; /* scratch of cut_pieces */
 	piece_list *piece_lists;
 	int last_listed;
 	/* The failsafe's sweeps on the workers (sweep_on_workers): per piece, its crossings (room for
@@ -473,6 +474,52 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 	return true;
 }
 
+/* The scratch of the listing and the failsafe's sweeps on the workers (gather_on_workers,
+ * sweep_on_workers). */
+static void free_pieces(plait_mesh_contacts *mc, const plait_allocator *a)
+{
+	if (mc->piece_lists != NULL) {
+		for (int k = 0; k < MAX_PIECES; ++k) {
+			plait_free(a, mc->piece_lists[k].pairs);
+		}
+	}
+	plait_free(a, mc->pieces);
+	plait_free(a, mc->piece_nodes);
+	plait_free(a, mc->piece_lists);
+	plait_free(a, mc->piece_hits);
+	plait_free(a, mc->piece_hit_count);
+	plait_free(a, mc->piece_swept);
+	plait_free(a, mc->piece_full);
+	mc->pieces = NULL;
+	mc->piece_nodes = NULL;
+	mc->piece_lists = NULL;
+	mc->piece_hits = NULL;
+	mc->piece_hit_count = mc->piece_swept = NULL;
+	mc->piece_full = NULL;
+	mc->piece_count = 0;
+}
+
+/* That scratch, made once, all of it or none; false when out of memory. */
+static bool reserve_pieces(plait_mesh_contacts *mc, const plait_allocator *a)
+{
+	if (mc->pieces != NULL) {
+		return true;
+	}
+	mc->pieces = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->pieces);
+	mc->piece_nodes = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_nodes);
+	mc->piece_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_lists);
+	mc->piece_hits = plait_alloc_zero(a, (size_t)MAX_PIECES * HIT_ROOM, sizeof *mc->piece_hits);
+	mc->piece_hit_count = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
+	mc->piece_swept = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
+	mc->piece_full = plait_alloc_zero(a, MAX_PIECES, sizeof(bool));
+	if (mc->pieces == NULL || mc->piece_nodes == NULL || mc->piece_lists == NULL || mc->piece_hits == NULL ||
+	    mc->piece_hit_count == NULL || mc->piece_swept == NULL || mc->piece_full == NULL) {
+		free_pieces(mc, a);
+		return false;
+	}
+	return true;
+}
+
 void plait_mesh_contacts_destroy(plait_sim *sim)
 {
 	plait_mesh_contacts *mc = sim->mesh_contacts;
@@ -488,17 +535,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->x_gather);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
-	if (mc->piece_lists != NULL) {
-		for (int k = 0; k < MAX_PIECES; ++k) {
-			plait_free(a, mc->piece_lists[k].pairs);
-		}
-	}
-	plait_free(a, mc->piece_lists);
-	plait_free(a, mc->pieces);
-	plait_free(a, mc->piece_hits);
-	plait_free(a, mc->piece_hit_count);
-	plait_free(a, mc->piece_swept);
-	plait_free(a, mc->piece_full);
+	free_pieces(mc, a);
 	plait_free(a, mc);
 	sim->mesh_contacts = NULL;
 }
@@ -1599,11 +1636,7 @@ static void list_pieces(void *context, int begin, int end)
  * whether the cut is the one before, which had last_count pieces. */
 static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, stage of, int last_count)
 {
-	int(*nodes)[2] = plait_alloc_zero(&sim->allocator, MAX_PIECES, sizeof *nodes);
-	if (nodes == NULL) {
-		mc->piece_count = 0;
-		return false;
-	}
+	int(*nodes)[2] = mc->piece_nodes;
 	int count = 0;
 	bool fits = true, same = true;
 	for (int a = 0; a < mc->object_count && fits; ++a) {
@@ -1626,7 +1659,6 @@ static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, stage of, 
 			}
 		}
 	}
-	plait_free(&sim->allocator, nodes);
 	mc->piece_count = fits ? count : 0;
 	return fits && same && count == last_count;
 }
@@ -1636,16 +1668,8 @@ static bool cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, stage of, 
 static bool gather_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
 {
 	const plait_allocator *a = &sim->allocator;
-	if (mc->pieces == NULL) {
-		mc->pieces = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->pieces);
-		mc->piece_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_lists);
-		if (mc->pieces == NULL || mc->piece_lists == NULL) {
-			plait_free(a, mc->pieces);
-			plait_free(a, mc->piece_lists);
-			mc->pieces = NULL;
-			mc->piece_lists = NULL;
-			return false;
-		}
+	if (!reserve_pieces(mc, a)) {
+		return false;
 	}
 	/* The first listing, with nothing to size the pieces' lists by, runs on the calling thread
 	 * (most pieces would fill their room and be listed twice); so does a listing much longer
@@ -2289,22 +2313,8 @@ static void sweep_pieces(void *context, int begin, int end)
  * hits and swept counts; false (nothing swept) when it cannot run there. */
 static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass, bool from_list)
 {
-	const plait_allocator *a = &sim->allocator;
-	if (mc->pieces == NULL || mc->piece_hits == NULL) {
-		if (mc->pieces == NULL) {
-			mc->pieces = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->pieces);
-			mc->piece_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_lists);
-		}
-		mc->piece_hits = plait_alloc_zero(a, (size_t)MAX_PIECES * HIT_ROOM, sizeof *mc->piece_hits);
-		mc->piece_hit_count = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
-		mc->piece_swept = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
-		mc->piece_full = plait_alloc_zero(a, MAX_PIECES, sizeof(bool));
-		if (mc->pieces == NULL || mc->piece_lists == NULL || mc->piece_hits == NULL ||
-		    mc->piece_hit_count == NULL || mc->piece_swept == NULL || mc->piece_full == NULL) {
-			plait_free(a, mc->piece_hits);
-			mc->piece_hits = NULL;
-			return false;
-		}
+	if (!reserve_pieces(mc, &sim->allocator)) {
+		return false;
 	}
 	sweep_job job = {sim, mc, pass->failsafe_distance, from_list, 0};
 	int pieces;
