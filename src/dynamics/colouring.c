@@ -196,6 +196,7 @@ bool plait_sim_colour(plait_sim *sim)
 		for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
 			plait_distance_block *b = distance[k];
 			permute(scratch, b->pair, sizeof *b->pair, b->count, orders[k]);
+			permute(scratch, b->point_offset, sizeof *b->point_offset, b->count, orders[k]);
 			permute(scratch, b->rest, sizeof(float), b->count, orders[k]);
 			permute(scratch, b->compliance_tension, sizeof(float), b->count, orders[k]);
 			permute(scratch, b->compliance_compression, sizeof(float), b->count, orders[k]);

@@ -6,23 +6,29 @@
 #if PLAIT_X86_KERNELS
 #include <immintrin.h>
 
-static inline __m128 load_point(const plait_point *points, int index)
+/* Points by byte offset (plait_point_offset). */
+static inline float *point_at(plait_point *points, uint32_t offset)
 {
-	return _mm_load_ps(&points[index].x.x);
+	return (float *)((char *)points + offset);
+}
+
+static inline __m128 load_point(plait_point *points, uint32_t offset)
+{
+	return _mm_load_ps(point_at(points, offset));
 }
 
 /* Loads the points of one side of 16 constraints and transposes them into a register per
  * coordinate, lane k holding constraint k: register r_m gets points m, m + 4, m + 8 and m + 12
  * in its four 128-bit blocks, and a 4x4 transpose inside each block finishes the job. */
-static inline void gather16(const plait_point *points, const int *index, __m512 *x, __m512 *y, __m512 *z,
+static inline void gather16(plait_point *points, const uint32_t *offset, __m512 *x, __m512 *y, __m512 *z,
                             __m512 *w)
 {
 	__m512 r[4];
 	for (int m = 0; m < 4; ++m) {
-		__m512 v = _mm512_castps128_ps512(load_point(points, index[m]));
-		v = _mm512_insertf32x4(v, load_point(points, index[m + 4]), 1);
-		v = _mm512_insertf32x4(v, load_point(points, index[m + 8]), 2);
-		r[m] = _mm512_insertf32x4(v, load_point(points, index[m + 12]), 3);
+		__m512 v = _mm512_castps128_ps512(load_point(points, offset[2 * m]));
+		v = _mm512_insertf32x4(v, load_point(points, offset[2 * (m + 4)]), 1);
+		v = _mm512_insertf32x4(v, load_point(points, offset[2 * (m + 8)]), 2);
+		r[m] = _mm512_insertf32x4(v, load_point(points, offset[2 * (m + 12)]), 3);
 	}
 	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]);
 	__m512 t1 = _mm512_unpacklo_ps(r[2], r[3]);
@@ -35,9 +41,10 @@ static inline void gather16(const plait_point *points, const int *index, __m512 
 }
 
 /* The inverse of gather16, storing the first `count` lanes only (lanes past a range's end
- * repeat lane 0's points, which must not be written back over it). */
-static inline void scatter16(plait_point *points, const int *index, int count, __m512 x, __m512 y, __m512 z,
-                             __m512 w)
+ * repeat lane 0's points, which must not be written back over it). Lane k's offset is
+ * offset[2 k]: one side of a block's point_offset pairs. */
+static inline void scatter16(plait_point *points, const uint32_t *offset, int count, __m512 x, __m512 y,
+                             __m512 z, __m512 w)
 {
 	__m512 t0 = _mm512_unpacklo_ps(x, y);
 	__m512 t1 = _mm512_unpacklo_ps(z, w);
@@ -49,10 +56,10 @@ static inline void scatter16(plait_point *points, const int *index, int count, _
 	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
 	if (count == 16) {
 		for (int m = 0; m < 4; ++m) {
-			_mm_store_ps(&points[index[m]].x.x, _mm512_castps512_ps128(r[m]));
-			_mm_store_ps(&points[index[m + 4]].x.x, _mm512_extractf32x4_ps(r[m], 1));
-			_mm_store_ps(&points[index[m + 8]].x.x, _mm512_extractf32x4_ps(r[m], 2));
-			_mm_store_ps(&points[index[m + 12]].x.x, _mm512_extractf32x4_ps(r[m], 3));
+			_mm_store_ps(point_at(points, offset[2 * m]), _mm512_castps512_ps128(r[m]));
+			_mm_store_ps(point_at(points, offset[2 * (m + 4)]), _mm512_extractf32x4_ps(r[m], 1));
+			_mm_store_ps(point_at(points, offset[2 * (m + 8)]), _mm512_extractf32x4_ps(r[m], 2));
+			_mm_store_ps(point_at(points, offset[2 * (m + 12)]), _mm512_extractf32x4_ps(r[m], 3));
 		}
 		return;
 	}
@@ -64,7 +71,7 @@ static inline void scatter16(plait_point *points, const int *index, int count, _
 		_mm_store_ps(&lanes[m + 12].x.x, _mm512_extractf32x4_ps(r[m], 3));
 	}
 	for (int k = 0; k < count; ++k) {
-		_mm_store_ps(&points[index[k]].x.x, _mm_load_ps(&lanes[k].x.x));
+		_mm_store_ps(point_at(points, offset[2 * k]), _mm_load_ps(&lanes[k].x.x));
 	}
 }
 
@@ -75,31 +82,38 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
 	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
+	const __m512 tiny_sq = _mm512_set1_ps(1e-24f);
 	__mmask16 lanes = (__mmask16)((1u << count) - 1u);
-	/* Copied out: the compiler cannot tell that the stores to points leave them alone. */
-	const int(*pair)[2] = (const int(*)[2])block->pair + c;
-	int index_i[16], index_j[16];
-	for (int k = 0; k < 16; ++k) {
-		int lane = k < count ? k : 0;
-		index_i[k] = pair[lane][0];
-		index_j[k] = pair[lane][1];
+	/* A full batch reads its offsets where they are; a short one copies them, lane 0's
+	 * repeated past count. */
+	const uint32_t *offset = block->point_offset[c];
+	uint32_t short_offset[2 * 16];
+	if (count < 16) {
+		for (int k = 0; k < 16; ++k) {
+			int lane = k < count ? k : 0;
+			short_offset[2 * k] = offset[2 * lane];
+			short_offset[2 * k + 1] = offset[2 * lane + 1];
+		}
+		offset = short_offset;
 	}
 	__m512 xi, yi, zi, wi, xj, yj, zj, wj;
-	gather16(points, index_i, &xi, &yi, &zi, &wi);
-	gather16(points, index_j, &xj, &yj, &zj, &wj);
+	gather16(points, offset, &xi, &yi, &zi, &wi);
+	gather16(points, offset + 1, &xj, &yj, &zj, &wj);
 	__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
 	__m512 length_sq =
 	    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
-	__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), tiny);
 	__m512 s;
 	if (rigid) {
-		/* No compliance: alpha~ = 0 and lambda stays 0 (distance_scalar.c, project_rigid). */
-		__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
+		/* No compliance: the rational step of distance_scalar.c, without a square root. */
+		__m512 rest = _mm512_maskz_loadu_ps(lanes, block->rest + c);
+		__m512 rest_sq = _mm512_mul_ps(rest, rest);
+		__m512 sum_sq = _mm512_max_ps(_mm512_add_ps(length_sq, rest_sq), tiny_sq);
 		__m512 w_sum = _mm512_add_ps(wi, wj);
 		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
-		__m512 denominator = _mm512_mask_blend_ps(moving, one, _mm512_mul_ps(w_sum, length));
-		s = _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(negative_zero, C), denominator));
+		__m512 denominator = _mm512_mask_blend_ps(moving, one, _mm512_mul_ps(w_sum, sum_sq));
+		s = _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(rest_sq, length_sq), denominator));
 	} else {
+		__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), tiny);
 		__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
 		__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
 		__m512 alpha =
@@ -124,8 +138,8 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 	xj = _mm512_add_ps(xj, _mm512_mul_ps(sj, dx));
 	yj = _mm512_add_ps(yj, _mm512_mul_ps(sj, dy));
 	zj = _mm512_add_ps(zj, _mm512_mul_ps(sj, dz));
-	scatter16(points, index_i, count, xi, yi, zi, wi);
-	scatter16(points, index_j, count, xj, yj, zj, wj);
+	scatter16(points, offset, count, xi, yi, zi, wi);
+	scatter16(points, offset + 1, count, xj, yj, zj, wj);
 }
 
 void plait_project_distance_avx512(plait_distance_block *block, plait_point *points, int begin, int end,

@@ -3,10 +3,9 @@
 #include <math.h>
 
 /* The reference arithmetic: the vector kernels repeat these operations lane by lane, in this
- * order, so the three give the same bits. A rigid block (no compliance) takes the general
- * formula with alpha = 0 and lambda = 0 in the same operations, without touching the
- * compliance and lambda arrays; `rigid` is a constant in each call below, so the compiler
- * makes two loops. */
+ * order, so the three give the same bits. A rigid block (no compliance) takes the step without
+ * a square root (distance_kernel.h) and never touches the compliance and lambda arrays;
+ * `rigid` is a constant in each call below, so the compiler makes two loops. */
 static inline __attribute__((always_inline)) void project_range(plait_distance_block *block,
                                                                 plait_point *points, int begin, int end,
                                                                 float inverse_h_squared, bool rigid)
@@ -19,15 +18,19 @@ static inline __attribute__((always_inline)) void project_range(plait_distance_b
 		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
 		float wi = pi->w, wj = pj->w;
 		float dx = pj->x.x - pi->x.x, dy = pj->x.y - pi->x.y, dz = pj->x.z - pi->x.z;
-		float length = sqrtf(dx * dx + dy * dy + dz * dz);
-		length = length > 1e-12f ? length : 1e-12f;
-		float C = length - rest[c];
+		float length_sq = dx * dx + dy * dy + dz * dz;
 		float w_sum = wi + wj;
 		float s;
 		if (rigid) {
-			float denominator = w_sum > 0.0f ? w_sum * length : 1.0f;
-			s = w_sum > 0.0f ? -C / denominator : 0.0f;
+			float rest_sq = rest[c] * rest[c];
+			float sum_sq = length_sq + rest_sq;
+			sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
+			float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
+			s = w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
 		} else {
+			float length = sqrtf(length_sq);
+			length = length > 1e-12f ? length : 1e-12f;
+			float C = length - rest[c];
 			float alpha = C > 0.0f ? tension[c] : compression[c];
 			bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
 			float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
@@ -78,15 +81,15 @@ bool plait_simd_supported(plait_simd level)
 }
 #endif
 
-/* AMD's Zen 4 runs 512-bit shuffles at half the rate of 256-bit ones, and the kernels are
- * bound by the transposes of their gathers and scatters: there AVX2 is the faster
- * (bench/bench_kernels: about 2.1 against 2.6 ns per projection at hang-128). Elsewhere the
- * widest wins. The choice never changes results, only speed. */
+/* The widest. AMD's Zen 4 runs 512-bit shuffles at half the rate of 256-bit ones, and AVX2
+ * was the faster there while the kernels widened and scaled every index (2.1 against 2.6 ns
+ * per projection at hang-128); with points addressed by byte offsets the kernels issue fewer
+ * instructions a constraint the wider they are, and AVX-512 wins there too (bench_kernels:
+ * 1.2 against 1.55 ns). The choice never changes results, only speed. */
 plait_simd plait_simd_best(void)
 {
 #if PLAIT_X86_KERNELS
-	bool prefer_avx2 = __builtin_cpu_is("amd") && plait_simd_supported(PLAIT_SIMD_AVX2);
-	if (plait_simd_supported(PLAIT_SIMD_AVX512) && !prefer_avx2) {
+	if (plait_simd_supported(PLAIT_SIMD_AVX512)) {
 		return PLAIT_SIMD_AVX512;
 	}
 #endif

@@ -61,4 +61,47 @@ static inline void scatter8(plait_point *points, const int *index, int count, __
 	}
 }
 
+/* gather8 and scatter8 with the points given by byte offsets (plait_point_offset), offset[k *
+ * stride] for lane k: no index to widen and scale, which was a fifth of the distance kernel's
+ * instructions. */
+static inline const float *point_at(const plait_point *points, uint32_t offset)
+{
+	return (const float *)((const char *)points + offset);
+}
+
+static inline void gather8_at(const plait_point *points, const uint32_t *offset, int stride, __m256 *x,
+                              __m256 *y, __m256 *z, __m256 *w)
+{
+	__m256 r0 = _mm256_castps128_ps256(_mm_load_ps(point_at(points, offset[0 * stride])));
+	__m256 r1 = _mm256_castps128_ps256(_mm_load_ps(point_at(points, offset[1 * stride])));
+	__m256 r2 = _mm256_castps128_ps256(_mm_load_ps(point_at(points, offset[2 * stride])));
+	__m256 r3 = _mm256_castps128_ps256(_mm_load_ps(point_at(points, offset[3 * stride])));
+	r0 = _mm256_insertf128_ps(r0, _mm_load_ps(point_at(points, offset[4 * stride])), 1);
+	r1 = _mm256_insertf128_ps(r1, _mm_load_ps(point_at(points, offset[5 * stride])), 1);
+	r2 = _mm256_insertf128_ps(r2, _mm_load_ps(point_at(points, offset[6 * stride])), 1);
+	r3 = _mm256_insertf128_ps(r3, _mm_load_ps(point_at(points, offset[7 * stride])), 1);
+	__m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpacklo_ps(r2, r3);
+	__m256 t2 = _mm256_unpackhi_ps(r0, r1), t3 = _mm256_unpackhi_ps(r2, r3);
+	*x = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	*y = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	*z = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	*w = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/* All eight lanes stored (a full batch). */
+static inline void scatter8_at(plait_point *points, const uint32_t *offset, int stride, __m256 x, __m256 y,
+                               __m256 z, __m256 w)
+{
+	__m256 t0 = _mm256_unpacklo_ps(x, y), t1 = _mm256_unpacklo_ps(z, w);
+	__m256 t2 = _mm256_unpackhi_ps(x, y), t3 = _mm256_unpackhi_ps(z, w);
+	__m256 r[4] = {_mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)),
+	               _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
+	               _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)),
+	               _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
+	for (int m = 0; m < 4; ++m) {
+		_mm_store_ps((float *)point_at(points, offset[m * stride]), _mm256_castps256_ps128(r[m]));
+		_mm_store_ps((float *)point_at(points, offset[(m + 4) * stride]), _mm256_extractf128_ps(r[m], 1));
+	}
+}
+
 #endif

@@ -51,6 +51,15 @@ typedef struct plait_point {
 	float w; /* inverse mass, 1/kg; 0 = pinned or kinematic */
 } plait_point;
 
+/* Particles a world can hold: point byte offsets (plait_distance_block.point_offset) must fit
+ * 32 bits. */
+#define PLAIT_MAX_PARTICLES ((int)(UINT32_MAX / sizeof(plait_point)))
+
+static inline uint32_t plait_point_offset(int index)
+{
+	return (uint32_t)index * (uint32_t)sizeof(plait_point);
+}
+
 /* Points are read and written whole, 16 bytes at a time, by every kernel. A load that does not
  * match the store it depends on (a 4-byte load from the middle of a 16-byte store still in
  * flight, or a 16-byte load over several smaller stores) cannot take its data from the store
@@ -124,6 +133,9 @@ typedef struct plait_colouring {
 typedef struct plait_distance_block {
 	int count, capacity;
 	int (*pair)[2];
+	/* pair as byte offsets into the point array (index * sizeof(plait_point)): the vector
+	 * kernels address points with them directly, without widening and scaling each index. */
+	uint32_t (*point_offset)[2];
 	float *rest;
 	float *compliance_tension;
 	float *compliance_compression;

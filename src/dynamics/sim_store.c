@@ -66,6 +66,7 @@ static void free_particles(plait_sim *sim)
 static void free_distance(plait_sim *sim, plait_distance_block *b)
 {
 	FREE_FIELD(*b, pair);
+	FREE_FIELD(*b, point_offset);
 	FREE_FIELD(*b, rest);
 	FREE_FIELD(*b, compliance_tension);
 	FREE_FIELD(*b, compliance_compression);
@@ -110,6 +111,9 @@ void plait_sim_destroy(plait_sim *sim)
 bool plait_sim_reserve_particles(plait_sim *sim, int count)
 {
 	plait_particles *p = &sim->particles;
+	if (count > PLAIT_MAX_PARTICLES - p->count) {
+		return false;
+	}
 	int needed = p->count + count;
 	if (needed <= p->capacity) {
 		return true;
@@ -151,6 +155,7 @@ bool plait_sim_reserve_distance(plait_sim *sim, plait_distance_block *b, int cou
 	int capacity = next_capacity(b->capacity, needed);
 	const plait_allocator *a = &sim->allocator;
 	bool ok = grow_array(a, (void **)&b->pair, sizeof *b->pair, b->count, capacity) &&
+	          grow_array(a, (void **)&b->point_offset, sizeof *b->point_offset, b->count, capacity) &&
 	          grow_array(a, (void **)&b->rest, sizeof(float), b->count, capacity) &&
 	          grow_array(a, (void **)&b->compliance_tension, sizeof(float), b->count, capacity) &&
 	          grow_array(a, (void **)&b->compliance_compression, sizeof(float), b->count, capacity) &&
@@ -290,6 +295,8 @@ void plait_sim_add_distance(plait_distance_block *b, int i, int j, float rest, f
 	int c = b->count++;
 	b->pair[c][0] = i;
 	b->pair[c][1] = j;
+	b->point_offset[c][0] = plait_point_offset(i);
+	b->point_offset[c][1] = plait_point_offset(j);
 	b->rest[c] = rest;
 	b->compliance_tension[c] = compliance_tension;
 	b->compliance_compression[c] = compliance_compression;
@@ -309,6 +316,8 @@ static void compact_distance(plait_distance_block *b, const int *remap, const pl
 		b->compliant_count += b->compliance_tension[c] != 0.0f || b->compliance_compression[c] != 0.0f;
 		b->pair[kept][0] = i;
 		b->pair[kept][1] = j;
+		b->point_offset[kept][0] = plait_point_offset(i);
+		b->point_offset[kept][1] = plait_point_offset(j);
 		b->rest[kept] = b->rest[c];
 		b->compliance_tension[kept] = b->compliance_tension[c];
 		b->compliance_compression[kept] = b->compliance_compression[c];
