@@ -113,6 +113,15 @@ int plait_tether_rows_avx2(plait_point *points, const int *particle, const float
 		lanes3 d = select3(first_worst, d0, d1);
 		lanes3 projected = mul_add3(wa, _mm256_div_ps(w_length, select1(first_worst, r0, r1)), d);
 		__m256 within = within_reach8(projected, oa, o_length, reach_scale);
+		__m256 t = load_rows(stiffness + b, n, lanes);
+		if (_mm256_movemask_ps(_mm256_andnot_ps(_mm256_or_ps(none, within), taut)) == 0) {
+			/* Every taut row's worst tether, pulled in, leaves it inside the other one (about
+			 * half the groups of a hanging cloth): the other candidates would not be chosen. */
+			lanes3 q = select3(none, p, mul_add3(p, t, sub3(projected, p)));
+			q = select3(taut, q, p);
+			scatter8(points, index, n, q.x, q.y, q.z, w);
+			continue;
+		}
 		lanes3 from_o = select3(first_worst, d1, d0);
 		__m256 o_distance_sq = select1(first_worst, d1_sq, d0_sq);
 		lanes3 onto_o = mul_add3(oa, _mm256_div_ps(o_length, select1(first_worst, r1, r0)), from_o);
@@ -140,7 +149,6 @@ int plait_tether_rows_avx2(plait_point *points, const int *particle, const float
 		    _mm256_and_ps(axis_positive, _mm256_and_ps(within_reach8(on_circle, wa, w_length, reach_scale),
 		                                               within_reach8(on_circle, oa, o_length, reach_scale)));
 		lanes3 q = select3(within, projected, select3(onto_o_fits, onto_o, on_circle));
-		__m256 t = load_rows(stiffness + b, n, lanes);
 		q = select3(none, p, mul_add3(p, t, sub3(q, p)));
 		__m256 found = _mm256_or_ps(_mm256_or_ps(none, within), _mm256_or_ps(onto_o_fits, circle_fits));
 		/* Written back: taut rows found here; the rest unchanged (the exact search reads them). */
