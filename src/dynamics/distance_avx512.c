@@ -75,15 +75,19 @@ static inline void scatter16(plait_point *points, const uint32_t *offset, int co
 	}
 }
 
-/* Projects constraints [c, c + count), count <= 16. Lanes past count compute on copies of
- * lane 0, are masked out of the block's arrays and are not written back. */
+/* Projects constraints [c + skip, c + count), count <= 16. Lanes past count compute on copies
+ * of lane 0, are masked out of the block's arrays and are not written back. The first `skip`
+ * lanes (a range's tail batch, `tail`: count is 16 and they were projected by the batch before)
+ * compute without effect and write their points back unchanged, which no other lane touches. */
 static inline __attribute__((always_inline)) void project16(plait_distance_block *block, plait_point *points,
-                                                            int c, int count, __m512 ih2, bool rigid)
+                                                            int c, int count, int skip, bool tail, __m512 ih2,
+                                                            bool rigid)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
 	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
 	const __m512 tiny_sq = _mm512_set1_ps(1e-24f);
 	__mmask16 lanes = (__mmask16)((1u << count) - 1u);
+	__mmask16 update = tail ? (__mmask16)(0xFFFFu << skip) : lanes;
 	/* A full batch reads its offsets where they are; a short one copies them, lane 0's
 	 * repeated past count. */
 	const uint32_t *offset = block->point_offset[c];
@@ -109,7 +113,7 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		__m512 rest_sq = _mm512_mul_ps(rest, rest);
 		__m512 sum_sq = _mm512_max_ps(_mm512_add_ps(length_sq, rest_sq), tiny_sq);
 		__m512 w_sum = _mm512_add_ps(wi, wj);
-		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
+		__mmask16 moving = _mm512_mask_cmp_ps_mask(update, w_sum, zero, _CMP_GT_OQ);
 		__m512 denominator = _mm512_mask_blend_ps(moving, one, _mm512_mul_ps(w_sum, sum_sq));
 		s = _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(rest_sq, length_sq), denominator));
 	} else {
@@ -121,7 +125,7 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		                         _mm512_maskz_loadu_ps(lanes, block->compliance_tension + c));
 		__m512 w_sum = _mm512_add_ps(wi, wj);
 		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
-		__mmask16 active = _mm512_mask_cmp_ps_mask(moving, alpha, zero, _CMP_GE_OQ);
+		__mmask16 active = _mm512_mask_cmp_ps_mask(moving & update, alpha, zero, _CMP_GE_OQ);
 		__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
 		__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
 		denominator = _mm512_mask_blend_ps(moving, one, denominator);
@@ -129,15 +133,16 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		s = _mm512_div_ps(_mm512_sub_ps(_mm512_sub_ps(negative_zero, C), _mm512_mul_ps(alpha_tilde, lambda)),
 		                  denominator);
 		s = _mm512_maskz_mov_ps(active, s);
-		_mm512_mask_storeu_ps(block->lambda + c, lanes, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
+		_mm512_mask_storeu_ps(block->lambda + c, update, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
 	}
 	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
-	xi = _mm512_sub_ps(xi, _mm512_mul_ps(si, dx));
-	yi = _mm512_sub_ps(yi, _mm512_mul_ps(si, dy));
-	zi = _mm512_sub_ps(zi, _mm512_mul_ps(si, dz));
-	xj = _mm512_add_ps(xj, _mm512_mul_ps(sj, dx));
-	yj = _mm512_add_ps(yj, _mm512_mul_ps(sj, dy));
-	zj = _mm512_add_ps(zj, _mm512_mul_ps(sj, dz));
+	/* Skipped lanes keep their loaded bits (x - 0 d would turn a -0 into +0). */
+	xi = _mm512_mask_sub_ps(xi, update, xi, _mm512_mul_ps(si, dx));
+	yi = _mm512_mask_sub_ps(yi, update, yi, _mm512_mul_ps(si, dy));
+	zi = _mm512_mask_sub_ps(zi, update, zi, _mm512_mul_ps(si, dz));
+	xj = _mm512_mask_add_ps(xj, update, xj, _mm512_mul_ps(sj, dx));
+	yj = _mm512_mask_add_ps(yj, update, yj, _mm512_mul_ps(sj, dy));
+	zj = _mm512_mask_add_ps(zj, update, zj, _mm512_mul_ps(sj, dz));
 	scatter16(points, offset, count, xi, yi, zi, wi);
 	scatter16(points, offset + 1, count, xj, yj, zj, wj);
 }
@@ -148,17 +153,28 @@ void plait_project_distance_avx512(plait_distance_block *block, plait_point *poi
 	const __m512 ih2 = _mm512_set1_ps(inverse_h_squared);
 	int c = begin;
 	bool rigid = block->compliant_count == 0;
+	/* A range of 16 or more ends with a full batch over its last 16, the lanes done already
+	 * skipped: a short batch's copies and masked moves cost about two full ones, and most
+	 * colour runs end in one. */
 	if (rigid) {
 		for (; c + 16 <= end; c += 16) {
-			project16(block, points, c, 16, ih2, true);
+			project16(block, points, c, 16, 0, false, ih2, true);
+		}
+		if (c < end && end - begin >= 16) {
+			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, true);
+			c = end;
 		}
 	} else {
 		for (; c + 16 <= end; c += 16) {
-			project16(block, points, c, 16, ih2, false);
+			project16(block, points, c, 16, 0, false, ih2, false);
+		}
+		if (c < end && end - begin >= 16) {
+			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, false);
+			c = end;
 		}
 	}
 	if (c < end) {
-		project16(block, points, c, end - c, ih2, rigid);
+		project16(block, points, c, end - c, 0, false, ih2, rigid);
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them
 	 * dirty when the remainder is a tail call, and SSE instructions after that carry a false
