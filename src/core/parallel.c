@@ -68,14 +68,17 @@ void plait_parallel_init(plait_parallel *parallel, plait_enqueue_task_fn *enqueu
 
 /* Claims and runs chunks of one share of loop `generation` until it is empty. The loop's
  * description is read only after a chunk was claimed: the calling thread cannot move on to
- * another loop while that chunk is pending, so the description is the claimed loop's. */
+ * another loop while that chunk is pending, so the description is the claimed loop's. The
+ * chunks run are counted into `done` once, when the share is empty: a count per chunk bounced
+ * its cache line between the threads at every chunk. */
 static void run_share(plait_parallel *parallel, uint32_t generation, int share)
 {
 	_Atomic uint64_t *slot = &parallel->shares[share].ticket;
 	uint64_t ticket = atomic_load_explicit(slot, memory_order_acquire);
+	int finished = 0;
 	for (;;) {
 		if (ticket_generation(ticket) != generation || ticket_next(ticket) >= ticket_end(ticket)) {
-			return;
+			break;
 		}
 		if (atomic_compare_exchange_weak_explicit(slot, &ticket, ticket + 1, memory_order_acq_rel,
 		                                          memory_order_acquire)) {
@@ -83,9 +86,12 @@ static void run_share(plait_parallel *parallel, uint32_t generation, int share)
 			int begin = parallel->begin + chunk * parallel->grain;
 			int end = begin + parallel->grain < parallel->end ? begin + parallel->grain : parallel->end;
 			parallel->fn(parallel->context, begin, end);
-			atomic_fetch_add_explicit(&parallel->done, 1, memory_order_release);
+			finished += 1;
 			ticket = atomic_load_explicit(slot, memory_order_acquire);
 		}
+	}
+	if (finished > 0) {
+		atomic_fetch_add_explicit(&parallel->done, finished, memory_order_release);
 	}
 }
 
