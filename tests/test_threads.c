@@ -524,7 +524,7 @@ static plait_vec3 *collide_scene_positions(collide_scene_kind kind, int n, int f
 	return x;
 }
 
-/* Mesh contacts list pairs and sweep them in the failsafe on the workers (mesh_contact.c,
+/* Mesh contacts list pairs and sweep them in the failsafe on the workers (mesh_contact_pieces.c,
  * pieces joined in the traversal's order; crossings joined into impact zones in that order):
  * the thin box (a sheet at 20 m/s onto 1 mm, where the failsafe acts in most frames) and the
  * drape of two sheets give the same bits with 1, 2 and 8 workers. */

@@ -2,7 +2,7 @@
  * the longest cloth edge D such that a cloth triangle with edges up to D, whose vertices are
  * held at least a given distance m outside the surface, cannot touch it (the argument, and how
  * mesh contacts use it to leave such corners and edges to the collider pass, is in
- * dynamics/mesh_contact.c). Found from how far the faces within reach of the feature turn
+ * dynamics/mesh_contact_features.c). Found from how far the faces within reach of the feature turn
  * against its reference normal: the surface there is a graph of slope at most tan A(t) at
  * distance t, and the reach is where the integral F of that slope meets the budget
  * M = sqrt(3) m. A feature on an open edge, with faces turned back or nearly at right angles,

@@ -1,0 +1,404 @@
+/* The failsafe at the end of a substep (mesh_contact.h): every pair swept from the substep's
+ * start, on the workers when there are any, and the pairs that cross joined into impact zones
+ * made rigid, or put back where the substep began. */
+#include "dynamics/mesh_contact_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "dynamics/contact.h"
+
+/* ---- Impact zones ---------------------------------------------------------------------------- */
+
+/* Merges the pair's vertices into one impact zone (union-find; the smaller index roots a
+ * union, so zones do not depend on the order pairs are met). */
+static void join_zone(plait_mesh_contacts *mc, const int *v, int n)
+{
+	int root = -1;
+	for (int k = 0; k < n; ++k) {
+		int i = v[k];
+		if (mc->zone_parent[i] < 0) {
+			mc->zone_parent[i] = i;
+			mc->touched[mc->touched_count++] = i;
+		}
+		while (mc->zone_parent[i] != i) {
+			mc->zone_parent[i] = mc->zone_parent[mc->zone_parent[i]];
+			i = mc->zone_parent[i];
+		}
+		if (root < 0) {
+			root = i;
+		} else if (i != root) {
+			int low = i < root ? i : root, high = i < root ? root : i;
+			mc->zone_parent[high] = low;
+			root = low;
+		}
+	}
+}
+
+static int zone_root(int *parent, int i)
+{
+	while (parent[i] != i) {
+		parent[i] = parent[parent[i]];
+		i = parent[i];
+	}
+	return i;
+}
+
+static int compare_members(const void *a, const void *b)
+{
+	const int *x = a, *y = b;
+	if (x[0] != y[0]) {
+		return x[0] < y[0] ? -1 : 1;
+	}
+	return x[1] < y[1] ? -1 : x[1] > y[1];
+}
+
+/* Rotation by angle |theta| about theta's direction (Rodrigues). */
+static vec3 rotate(vec3 theta, vec3 r)
+{
+	float angle = v3_length(theta);
+	if (!(angle > 1e-12f)) {
+		return v3_add(r, v3_cross(theta, r));
+	}
+	vec3 axis = v3_scale(theta, 1.0f / angle);
+	float c = cosf(angle), s = sinf(angle);
+	return v3_add(v3_add(v3_scale(r, c), v3_scale(v3_cross(axis, r), s)),
+	              v3_scale(axis, v3_dot(axis, r) * (1.0f - c)));
+}
+
+/* Solves the symmetric 3x3 system I x = b (Cramer, in double); a singular I (a zone on a line)
+ * is regularised. */
+static vec3 solve_inertia(const double i[6], vec3 b)
+{
+	double xx = i[0], yy = i[1], zz = i[2], xy = i[3], xz = i[4], yz = i[5];
+	double trace = xx + yy + zz;
+	double eps = 1e-6 * trace + 1e-30;
+	xx += eps;
+	yy += eps;
+	zz += eps;
+	double c00 = yy * zz - yz * yz, c01 = xz * yz - xy * zz, c02 = xy * yz - xz * yy;
+	double det = xx * c00 + xy * c01 + xz * c02;
+	if (!(fabs(det) > 0.0)) {
+		return v3(0.0f, 0.0f, 0.0f);
+	}
+	double c11 = xx * zz - xz * xz, c12 = xy * xz - xx * yz, c22 = xx * yy - xy * xy;
+	double bx = b.x, by = b.y, bz = b.z;
+	return v3((float)((c00 * bx + c01 * by + c02 * bz) / det),
+	          (float)((c01 * bx + c11 * by + c12 * bz) / det),
+	          (float)((c02 * bx + c12 * by + c22 * bz) / det));
+}
+
+/* Makes the motion of zone members[first, last) over the substep rigid: the mean displacement
+ * and the angular momentum (about the centre of mass) of the substep are kept. A zone with
+ * pinned vertices takes their mean displacement, without rotation. */
+static void rigidify(plait_particles *p, int (*members)[2], int first, int last)
+{
+	double mass = 0.0, c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0};
+	double pinned = 0.0, pin_motion[3] = {0, 0, 0};
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		vec3 a = p->x_prev[i], b = p->point[i].x;
+		if (p->point[i].w == 0.0f) {
+			pinned += 1.0;
+			pin_motion[0] += (double)(b.x - a.x);
+			pin_motion[1] += (double)(b.y - a.y);
+			pin_motion[2] += (double)(b.z - a.z);
+			continue;
+		}
+		double m = 1.0 / (double)p->point[i].w;
+		mass += m;
+		c0[0] += m * a.x;
+		c0[1] += m * a.y;
+		c0[2] += m * a.z;
+		c1[0] += m * b.x;
+		c1[1] += m * b.y;
+		c1[2] += m * b.z;
+	}
+	if (pinned > 0.0) {
+		vec3 shift = v3((float)(pin_motion[0] / pinned), (float)(pin_motion[1] / pinned),
+		                (float)(pin_motion[2] / pinned));
+		for (int k = first; k < last; ++k) {
+			int i = members[k][1];
+			if (p->point[i].w > 0.0f) {
+				p->point[i].x = v3_add(p->x_prev[i], shift);
+			}
+		}
+		return;
+	}
+	if (!(mass > 0.0)) {
+		return;
+	}
+	vec3 centre0 = v3((float)(c0[0] / mass), (float)(c0[1] / mass), (float)(c0[2] / mass));
+	vec3 centre1 = v3((float)(c1[0] / mass), (float)(c1[1] / mass), (float)(c1[2] / mass));
+	vec3 shift = v3_sub(centre1, centre0);
+	double inertia[6] = {0, 0, 0, 0, 0, 0};
+	double momentum[3] = {0, 0, 0};
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		double m = 1.0 / (double)p->point[i].w;
+		vec3 r = v3_sub(p->x_prev[i], centre0);
+		vec3 d = v3_sub(v3_sub(p->point[i].x, p->x_prev[i]), shift);
+		vec3 l = v3_cross(r, d);
+		momentum[0] += m * l.x;
+		momentum[1] += m * l.y;
+		momentum[2] += m * l.z;
+		double rr = (double)v3_dot(r, r);
+		inertia[0] += m * (rr - (double)(r.x * r.x));
+		inertia[1] += m * (rr - (double)(r.y * r.y));
+		inertia[2] += m * (rr - (double)(r.z * r.z));
+		inertia[3] -= m * (double)(r.x * r.y);
+		inertia[4] -= m * (double)(r.x * r.z);
+		inertia[5] -= m * (double)(r.y * r.z);
+	}
+	vec3 theta = solve_inertia(inertia, v3((float)momentum[0], (float)momentum[1], (float)momentum[2]));
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		p->point[i].x = v3_add(centre1, rotate(theta, v3_sub(p->x_prev[i], centre0)));
+	}
+}
+
+/* ---- Sweeps ---------------------------------------------------------------------------------- */
+
+/* The failsafe's test of one pair: swept from the start of the substep to now. */
+void plait_mesh_contacts_sweep_pair(pair_pass *pass, int type, const int *v)
+{
+	const plait_particles *p = &pass->sim->particles;
+	int n = pair_size[type];
+	vec3 start[4] = {{0}}, end[4] = {{0}};
+	gather_points(p->x_prev, v, n, start);
+	gather_current(p->point, v, n, end);
+	pass->swept += 1;
+	if (plait_mesh_contacts_paths_apart(type, start, end, pass->failsafe_distance)) {
+		return;
+	}
+	if (plait_mesh_contacts_paths_meet(type, start, end, pass->failsafe_distance)) {
+		pass->hits += 1;
+		if (pass->hits_out == NULL) {
+			join_zone(pass->mc, v, n);
+		} else if (pass->hits_count == HIT_ROOM) {
+			pass->full = true;
+		} else {
+			sweep_hit *hit = &pass->hits_out[pass->hits_count++];
+			memcpy(hit->v, v, sizeof(int) * (size_t)n);
+			hit->n = n;
+		}
+	}
+}
+
+/* The rest pairs, each swept unless a lower bound of its distance at the substep's start, less
+ * what its motion (relative to its first vertex) can take off, still keeps it apart. The bound
+ * is carried from substep to substep, and known exactly again whenever the pair is swept. */
+static void sweep_rest_pairs(pair_pass *pass)
+{
+	plait_mesh_contacts *mc = pass->mc;
+	const plait_particles *p = &pass->sim->particles;
+	for (int k = 0; k < mc->rest_count; ++k) {
+		contact_pair *pair = &mc->rest_pairs[k];
+		int n = pair_size[pair->type];
+		vec3 start[4] = {{0}}, end[4] = {{0}};
+		gather_points(p->x_prev, pair->v, n, start);
+		gather_current(p->point, pair->v, n, end);
+		float motion = plait_mesh_contacts_largest_motion(pair->type, start, end);
+		if (pair->lower - motion > pass->failsafe_distance) {
+			pair->lower -= motion;
+			continue;
+		}
+		pair->lower = plait_mesh_contacts_primitive_distance(pair->type, end);
+		float d0 = plait_mesh_contacts_primitive_distance(pair->type, start);
+		if (0.5f * (d0 + pair->lower - motion) > pass->failsafe_distance) {
+			continue;
+		}
+		if (plait_mesh_contacts_paths_meet(pair->type, start, end, pass->failsafe_distance)) {
+			pass->hits += 1;
+			join_zone(mc, pair->v, n);
+		}
+	}
+}
+
+void plait_mesh_contacts_forget_rest_bounds(plait_mesh_contacts *mc)
+{
+	for (int k = 0; k < mc->rest_count; ++k) {
+		mc->rest_pairs[k].lower = -1.0f;
+	}
+}
+
+/* The listed pairs [begin, end) that may have come within the distance, swept. */
+static void sweep_listed(plait_mesh_contacts *mc, pair_pass *pass, int begin, int end)
+{
+	for (int k = begin; k < end; ++k) {
+		if (mc->pairs[k].lower <= pass->failsafe_distance) {
+			plait_mesh_contacts_sweep_pair(pass, mc->pairs[k].type, mc->pairs[k].v);
+		}
+	}
+}
+
+typedef struct sweep_job {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+	float distance;
+	bool from_list;
+	int chunk; /* from_list: listed pairs a piece */
+} sweep_job;
+
+/* Piece k of a sweep: listed pairs [k chunk, (k + 1) chunk), or piece k of the traversal. */
+static void sweep_piece(const sweep_job *job, pair_pass *pass, int k)
+{
+	plait_mesh_contacts *mc = job->mc;
+	if (job->from_list) {
+		int begin = k * job->chunk,
+		    end = begin + job->chunk < mc->pair_count ? begin + job->chunk : mc->pair_count;
+		sweep_listed(mc, pass, begin, end);
+	} else {
+		plait_mesh_contacts_list_piece(mc, pass, &mc->pieces[k]);
+	}
+}
+
+static void sweep_pieces(void *context, int begin, int end)
+{
+	const sweep_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	for (int k = begin; k < end; ++k) {
+		pair_pass pass = {.sim = job->sim,
+		                  .mc = mc,
+		                  .stage = STAGE_FAILSAFE,
+		                  .failsafe_distance = job->distance,
+		                  .hits_out = mc->piece_hits + (size_t)k * HIT_ROOM};
+		sweep_piece(job, &pass, k);
+		mc->piece_hit_count[k] = pass.hits_count;
+		mc->piece_swept[k] = pass.swept;
+		mc->piece_full[k] = pass.full;
+	}
+}
+
+/* The failsafe's sweep of the listed pairs (from_list) or its traversal, on the workers: each
+ * piece keeps its crossings, which then join their impact zones here in piece order, the order
+ * one thread meets them in (a piece that found too many is swept again here). Adds to pass's
+ * hits and swept counts; false (nothing swept) when it cannot run there. */
+static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass, bool from_list)
+{
+	if (!plait_mesh_contacts_reserve_pieces(mc, &sim->allocator)) {
+		return false;
+	}
+	sweep_job job = {sim, mc, pass->failsafe_distance, from_list, 0};
+	int pieces;
+	if (from_list) {
+		job.chunk = 4096;
+		if (mc->pair_count > job.chunk * MAX_PIECES) {
+			job.chunk = (mc->pair_count + MAX_PIECES - 1) / MAX_PIECES;
+		}
+		pieces = (mc->pair_count + job.chunk - 1) / job.chunk;
+	} else {
+		/* The traversal's boxes are fitted to the paths: a cut of its own. */
+		(void)plait_mesh_contacts_cut_pieces(sim, mc, STAGE_FAILSAFE, 0);
+		pieces = mc->piece_count;
+		if (pieces == 0) {
+			return false;
+		}
+	}
+	plait_parallel_for(&sim->parallel, sweep_pieces, &job, 0, pieces, 1);
+	for (int k = 0; k < pieces; ++k) {
+		if (mc->piece_full[k]) {
+			pair_pass again = {
+			    .sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = job.distance};
+			sweep_piece(&job, &again, k);
+			pass->hits += again.hits;
+			pass->swept += again.swept;
+			continue;
+		}
+		const sweep_hit *hits = mc->piece_hits + (size_t)k * HIT_ROOM;
+		for (int h = 0; h < mc->piece_hit_count[k]; ++h) {
+			join_zone(mc, hits[h].v, hits[h].n);
+		}
+		pass->hits += mc->piece_hit_count[k];
+		pass->swept += mc->piece_swept[k];
+	}
+	return true;
+}
+
+/* Sweeps every pair from the start of the substep to now; returns the crossing pairs found
+ * and leaves them merged into zones. */
+static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
+{
+	pair_pass pass = {.sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = distance};
+	sweep_rest_pairs(&pass);
+	if (from_list) {
+		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, true))) {
+			sweep_listed(mc, &pass, 0, mc->pair_count);
+		}
+		return pass.hits;
+	}
+	plait_mesh_contacts_fit_boxes(sim, mc, true, distance);
+	int before = pass.swept;
+	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {
+		plait_mesh_contacts_traverse_objects(mc, &pass);
+	}
+	mc->traversal_sweeps = pass.swept - before;
+	return pass.hits;
+}
+
+#define ZONE_ROUNDS 12
+#define FREEZE_ROUNDS 12
+
+void plait_mesh_contacts_failsafe(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc == NULL || !mc->active) {
+		return;
+	}
+	plait_particles *p = &sim->particles;
+	float distance = FAILSAFE_DISTANCE;
+	/* A list that no longer covers is gathered again here, rather than replaced by a traversal
+	 * over the paths, when the last list was no longer than that traversal's sweeps: then it
+	 * costs about the same, covers the substep from its start (the guards hold the motion so
+	 * far), and often serves the next substep too. Layers lying on each other list far more
+	 * pairs than their paths meet, and keep the traversal. */
+	bool covers = plait_mesh_contacts_list_covers(sim, mc, true);
+	if (!covers && mc->pair_count <= mc->traversal_sweeps) {
+		plait_mesh_contacts_gather(sim, mc);
+		covers = mc->list_valid;
+	}
+	for (int round = 0; round < ZONE_ROUNDS + FREEZE_ROUNDS; ++round) {
+		int hits = find_crossings(sim, mc, distance, round == 0 && covers);
+		if (hits == 0) {
+			break;
+		}
+		/* The zones move vertices after their pairs were measured. */
+		plait_mesh_contacts_forget_rest_bounds(mc);
+		sim->ccd_hits += hits;
+		/* Zone by zone: members sorted by root. */
+		for (int k = 0; k < mc->touched_count; ++k) {
+			int i = mc->touched[k];
+			mc->members[k][0] = zone_root(mc->zone_parent, i);
+			mc->members[k][1] = i;
+		}
+		qsort(mc->members, (size_t)mc->touched_count, sizeof *mc->members, compare_members);
+		for (int start = 0; start < mc->touched_count;) {
+			int end = start + 1;
+			while (end < mc->touched_count && mc->members[end][0] == mc->members[start][0]) {
+				++end;
+			}
+			if (round < ZONE_ROUNDS) {
+				rigidify(p, mc->members, start, end);
+			} else {
+				/* Still crossing: back to where the substep began, which was free. */
+				for (int k = start; k < end; ++k) {
+					int i = mc->members[k][1];
+					if (p->point[i].w > 0.0f) {
+						p->point[i].x = p->x_prev[i];
+					}
+				}
+			}
+			sim->failsafe += 1;
+			start = end;
+		}
+		/* Colliders have the last word over the moved vertices too; the next round checks that
+		 * this crossed nothing. */
+		if (round < ZONE_ROUNDS) {
+			sim->contacts += plait_collide_listed_with_colliders(sim, mc->touched, mc->touched_count);
+		}
+	}
+	for (int k = 0; k < mc->touched_count; ++k) {
+		mc->zone_parent[mc->touched[k]] = -1;
+	}
+	mc->touched_count = 0;
+}

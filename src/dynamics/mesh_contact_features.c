@@ -1,0 +1,288 @@
+/* Which of a rigid collider's corners and edges need mesh contacts.
+ *
+ * A collider's faces meet cloth vertices in the collider pass (contact.c), which ends every
+ * substep (and every failsafe round) with each vertex at least its contact distance r (its
+ * radius plus the collider's thickness) outside the collider. Mesh contacts add the collider's
+ * corners against cloth triangles and its edges against cloth edges, for what reaches between
+ * vertices held out like that. Where the collider is smooth at the scale of the cloth's
+ * triangles nothing can, and a corner or edge there is left out. The argument, for a cloth
+ * triangle T whose edges are at most D long and whose vertices v_i are at least m = r / 2 (the
+ * half of r this leans on) from the collider's surface, on its outside:
+ *
+ * Take a point x of a corner or edge f, and the plane Q through x normal to f's reference
+ * normal n0 (the mean of the normals of f's faces). Let M = sqrt(3) m. Suppose every face within
+ * distance t + M of f makes an angle at most A(t) < 1 rad with n0, for every t up to D, and
+ * none of them has an edge not shared by exactly two faces. Then, over the disc of radius D
+ * about x in Q, the surface through x is a graph h over Q (h(x) = 0) with slope at most
+ * tan A(t) at distance t from x: walking out from x, the surface point above or below where we
+ * are is within t + |h| of x, on a face within that distance of f, and each face leads on to
+ * exactly one other. So |h| <= F(t) at distance t, F the integral of tan A from 0, and while
+ * F(D) < M the walk never leaves the faces counted. No other sheet of the surface comes within
+ * the disc: it would be a face within D + M facing away from n0 (closed surfaces), or one with
+ * an open edge.
+ *
+ * If T touched f at x, then x = sum of l_i v_i (barycentric) and, in heights over Q, each v_i
+ * is at least m above the graph under it (that point of the surface is at least m from v_i; for
+ * a surface oriented the other way, below it, with signs turned), so with d_i = |v_i - x|
+ *   0 = height(x) - h(x) = sum l_i (height(v_i) - h(v_i)) + sum l_i h(v_i) >= m - sum l_i F(d_i).
+ * F is convex with F(0) = 0, so F(d_i) <= F(D) d_i / D, and sum l_i d_i <= (sum l_i d_i^2)^1/2
+ * = (sum over i < j of l_i l_j |v_i - v_j|^2)^1/2 <= D / sqrt(3): m <= F(D) / sqrt(3), false when
+ * F(D) < M. Where F(D) < M, then, f touches no cloth triangle (or segment) with edges up to D at
+ * the end of a substep and needs no contacts with it. plait_mesh_smooth_reaches
+ * (collision/smooth_reach.c) finds, per corner and edge, the largest such D: its smooth reach.
+ *
+ * A crossing of T and the collider at the end of a substep needs a collider edge through T (a
+ * straight cut of T by one face would leave a vertex of T inside), an edge that can touch T:
+ * one whose reach is at most T's longest edge. It came through T, from the free start of the
+ * substep, past one of T's edges or with a corner through T. So an edge-edge pair is kept when
+ * either triangle of its cloth edge is long enough for the collider's edge, and a corner's reach
+ * is at most its edges': then every crossing is one the listed pairs and the failsafe see.
+ * Concave and flat edges fall out of the same bound (their faces turn little against n0), and
+ * sharp ones keep their contacts at any D.
+ *
+ * Each cloth element's D (pair_reach) is the longest edge of it and of the triangles across its
+ * edges: at a listing with slack, and the list covers only while no edge outgrows it; in the
+ * failsafe's traversal, as they end the substep (plait_mesh_contacts_measure_cloth_edges). A
+ * deforming collider's angles change from frame to frame, and between frames its triangles'
+ * normals are not bounded by those at the frames: it keeps all its corners and edges. */
+#include "dynamics/mesh_contact_internal.h"
+
+#include "collision/mesh_shape.h"
+#include "collision/smooth_reach.h"
+
+/* The share of the contact distance the argument leans on: the collider pass pushes vertices
+ * out to all of it, friction and other colliders can take back some. */
+#define SMOOTH_MARGIN 0.5f
+/* Reaches are looked for up to this many times the longest cloth edge at the build (beyond
+ * that, a stretched cloth meets every corner and edge again). */
+#define SMOOTH_RANGE 2.0f
+/* The smooth reaches of one rigid collider's corners and edges (object o, from its surface's
+ * shape), into mc->features from `features` on; false only when out of memory. */
+static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_object *o,
+                             const plait_mesh_shape *shape, float budget, float range, int features)
+{
+	const plait_allocator *a = &sim->allocator;
+	int nt = shape->triangle_count;
+	float *vertex_reach =
+	    plait_alloc(a, sizeof(float) * (size_t)(shape->vertex_count > 0 ? shape->vertex_count : 1));
+	float *edge_reach = plait_alloc(a, sizeof(float) * (size_t)(3 * nt > 0 ? 3 * nt : 1));
+	bool ok = vertex_reach != NULL && edge_reach != NULL &&
+	          plait_mesh_smooth_reaches(shape, a, budget, range, vertex_reach, edge_reach);
+	if (ok) {
+		for (int t = 0; t < nt; ++t) {
+			const element *el = &mc->elements[o->first + t];
+			collider_features *f = &mc->features[features + t];
+			f->vertices = el->own_vertices;
+			f->edges = el->own_edges;
+			for (int k = 0; k < 3; ++k) {
+				f->reach[k] = vertex_reach[shape->triangles[t][k]];
+				f->reach[3 + k] = edge_reach[3 * t + k];
+			}
+		}
+	}
+	plait_free(a, vertex_reach);
+	plait_free(a, edge_reach);
+	return ok;
+}
+
+/* The square of an element's longest edge now (a segment's length; 0 for a point). */
+static float longest_edge_sq(const plait_particles *p, const element *el)
+{
+	float longest = 0.0f;
+	for (int m = 0; m < el->size; ++m) {
+		vec3 d = v3_sub(p->point[el->v[(m + 1) % el->size]].x, p->point[el->v[m]].x);
+		longest = plait_maxf(longest, v3_length_sq(d));
+	}
+	return longest;
+}
+
+/* Whether an object's cloth triangles or curve segments meet colliders' surfaces here. */
+static bool meets_collider_surfaces(const plait_sim *sim, const plait_mesh_contacts *mc,
+                                    const collision_object *o)
+{
+	const plait_material *m = &sim->materials[o->material];
+	return m->type != PLAIT_OBJECT_COLLIDER && m->collider_flag != PLAIT_COLLIDE_VERTEX && o->count > 0 &&
+	       mc->elements[o->first].size >= 2;
+}
+
+/* The smooth reaches of every rigid mesh collider's corners and edges (see above), from the
+ * current shapes: the contact distance from the thinnest cloth or curve that meets them, the
+ * range from their longest edge. Colliders with nothing to leave out (boxes) keep features -1. */
+bool plait_mesh_contacts_build_collider_features(plait_sim *sim, plait_mesh_contacts *mc,
+                                                 const plait_triangle_edge *edges, int edge_count)
+{
+	const plait_particles *p = &sim->particles;
+	float thinnest = INFINITY, longest = 0.0f;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			longest = plait_maxf(longest, sqrtf(longest_edge_sq(p, el)));
+			for (int m = 0; m < el->size; ++m) {
+				thinnest = plait_minf(thinnest, p->radius[el->v[m]]);
+			}
+		}
+	}
+	if (!(longest > 0.0f) || !isfinite(thinnest)) {
+		return true;
+	}
+	int total = 0;
+	for (int k = 0; k < mc->object_count; ++k) {
+		if (sim->materials[mc->objects[k].material].type == PLAIT_OBJECT_COLLIDER) {
+			total += mc->objects[k].count;
+		}
+	}
+	if (total == 0) {
+		return true;
+	}
+	mc->features = plait_alloc_zero(&sim->allocator, (size_t)total, sizeof *mc->features);
+	if (mc->features == NULL) {
+		return false;
+	}
+	int next = 0;
+	for (int k = 0; k < mc->object_count; ++k) {
+		collision_object *o = &mc->objects[k];
+		const plait_material *m = &sim->materials[o->material];
+		if (m->type != PLAIT_OBJECT_COLLIDER) {
+			continue;
+		}
+		const plait_collider *c = NULL;
+		for (int i = 0; i < sim->collider_count; ++i) {
+			c = sim->colliders[i].object == m->object ? &sim->colliders[i] : c;
+		}
+		const plait_mesh_shape *shape = NULL;
+		for (int s = 0; s < sim->surface_count; ++s) {
+			shape = sim->surfaces[s].material == o->material ? sim->surfaces[s].shape : shape;
+		}
+		/* M above: sqrt(3) times the margin the argument leans on. */
+		float budget = 1.7320508f * SMOOTH_MARGIN * (thinnest + (c != NULL ? c->thickness : 0.0f));
+		if (c == NULL || c->mesh_start != NULL || shape == NULL || shape->triangle_count != o->count ||
+		    !(budget > 0.0f)) {
+			continue; /* deforming (or unknown): every corner and edge keeps its contacts */
+		}
+		if (!collider_reaches(sim, mc, o, shape, budget, SMOOTH_RANGE * longest + budget, next)) {
+			return false;
+		}
+		bool any = false;
+		for (int t = 0; t < o->count && !any; ++t) {
+			for (int q = 0; q < 6; ++q) {
+				any = any || mc->features[next + t].reach[q] > 0.0f;
+			}
+		}
+		if (any) {
+			o->features = next;
+			next += o->count;
+		}
+	}
+	if (next == 0) {
+		plait_free(&sim->allocator, mc->features);
+		mc->features = NULL;
+		return true;
+	}
+	int count = mc->element_count;
+	mc->neighbours = plait_alloc(&sim->allocator, sizeof *mc->neighbours * (size_t)count);
+	mc->cloth_bound = plait_alloc_zero(&sim->allocator, (size_t)count, sizeof(float));
+	mc->cloth_bound_scratch = plait_alloc_zero(&sim->allocator, (size_t)count, sizeof(float));
+	mc->pair_reach = plait_alloc_zero(&sim->allocator, (size_t)count, sizeof(float));
+	if (mc->neighbours == NULL || mc->cloth_bound == NULL || mc->cloth_bound_scratch == NULL ||
+	    mc->pair_reach == NULL) {
+		return false;
+	}
+	for (int e = 0; e < count; ++e) {
+		mc->neighbours[e][0] = mc->neighbours[e][1] = mc->neighbours[e][2] = -1;
+	}
+	for (int k = 0; k + 1 < edge_count; ++k) {
+		const plait_triangle_edge *x = &edges[k], *y = &edges[k + 1];
+		if (x->low == y->low && x->high == y->high) {
+			mc->neighbours[x->triangle][x->corner] = y->triangle;
+			mc->neighbours[y->triangle][y->corner] = x->triangle;
+		}
+	}
+	return true;
+}
+
+/* The longest edge of each cloth triangle and curve segment that meets filtered colliders, into
+ * mc->cloth_bound (grown by `slack`), and each one's D for its element pairs with them, into
+ * mc->pair_reach: the largest bound over it and the triangles across its edges (an edge-edge
+ * pair is owned by one of the two triangles of its cloth edge, and must hold for both). At a
+ * listing the bound has slack, and the list covers only while no edge outgrows it
+ * (plait_mesh_contacts_list_covers); the failsafe's traversal measures the substep's end,
+ * with none. */
+void plait_mesh_contacts_measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, float slack)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			mc->pair_reach[e] = slack * sqrtf(longest_edge_sq(p, el));
+		}
+		if (slack > 1.0f) {
+			for (int e = o->first; e < o->first + o->count; ++e) {
+				mc->cloth_bound[e] = mc->pair_reach[e];
+			}
+		}
+		/* The neighbours' bounds, read from cloth_bound (at a listing) or from a second pass. */
+		const float *bound = slack > 1.0f ? mc->cloth_bound : mc->pair_reach;
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			float reach = bound[e];
+			for (int q = 0; q < 3; ++q) {
+				int n = mc->neighbours[e][q];
+				reach = n >= 0 ? plait_maxf(reach, bound[n]) : reach;
+			}
+			mc->cloth_bound_scratch[e] = reach;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			mc->pair_reach[e] = mc->cloth_bound_scratch[e];
+		}
+	}
+}
+
+/* Whether every cloth edge that meets filtered colliders is still within its bound. */
+bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_contacts *mc)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			const element *el = &mc->elements[e];
+			if (longest_edge_sq(p, el) > mc->cloth_bound[e] * mc->cloth_bound[e]) {
+				return false;
+			}
+		}
+	}
+	return true;
+}
+
+/* Which corners and edges of a filtered collider's element c meet cloth element e here: bits of
+ * its own vertices and edges whose smooth reach the cloth's D (pair_reach) does not stay under. */
+void plait_mesh_contacts_live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices,
+                                       uint8_t *edges)
+{
+	const collision_object *o = &mc->objects[mc->object_of[mc->elements[c].v[0]]];
+	const collider_features *f = &mc->features[o->features + c - o->first];
+	float d = mc->pair_reach[e];
+	uint8_t v = 0, g = 0;
+	for (int q = 0; q < 3; ++q) {
+		v |= (uint8_t)((d >= f->reach[q]) << q);
+		g |= (uint8_t)((d >= f->reach[3 + q]) << q);
+	}
+	*vertices = v;
+	*edges = g;
+}
+
+void plait_mesh_contacts_collider_features(const plait_sim *sim, int *kept, int *left_out)
+{
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	*kept = mc != NULL ? mc->features_kept : 0;
+	*left_out = mc != NULL ? mc->features_left_out : 0;
+}

@@ -1,0 +1,323 @@
+/* The private parts of mesh contacts (mesh_contact.h), shared by the files of the stage:
+ *   mesh_contact.c           the stage's life (prepare, begin a substep, destroy) and its
+ *                            contacts: projection and response
+ *   mesh_contact_elements.c  the collision elements and objects, rest pairs, particle scratch
+ *   mesh_contact_geometry.c  distances and paths of primitive pairs
+ *   mesh_contact_pairs.c     which primitive pairs exist: the walk of an element pair
+ *   mesh_contact_features.c  which of a rigid collider's corners and edges need mesh contacts
+ *   mesh_contact_listing.c   element boxes, the traversal of objects, the gather and its guards
+ *   mesh_contact_pieces.c    the traversals cut into pieces, listed on the workers
+ *   mesh_contact_failsafe.c  the end-of-substep failsafe: sweeps and impact zones
+ * A function one of them lends the others is named plait_mesh_contacts_ and what it was called
+ * when they were one file; the rest stay static where they are used. */
+#ifndef PLAIT_DYNAMICS_MESH_CONTACT_INTERNAL_H
+#define PLAIT_DYNAMICS_MESH_CONTACT_INTERNAL_H
+
+#include "collision/element_tree.h"
+#include "dynamics/mesh_contact.h"
+#include "topology/topology.h"
+
+/* Primitive pairs. The first primitive's vertices come first in v[]. */
+typedef enum pair_type {
+	PAIR_VERTEX_FACE = 0, /* v[0] against triangle v[1..3] */
+	PAIR_EDGE_EDGE,       /* v[0]-v[1] against v[2]-v[3] */
+	PAIR_VERTEX_EDGE,     /* v[0] against v[1]-v[2] */
+	PAIR_VERTEX_VERTEX,   /* v[0] against v[1] */
+} pair_type;
+
+static const int pair_size[4] = {4, 4, 3, 2};
+
+/* Listing on the workers: traversals cut this many splits down, into at most so many pieces. */
+#define PIECE_DEPTH 6
+#define MAX_PIECES 2048
+
+/* A collision element: a triangle of a cloth, a segment of a curve, or a loose particle. Each
+ * vertex and each edge is tested by exactly one element, its owner (the first element that has
+ * it): a pair of primitives is then met once, through the pair of their owners, whose boxes
+ * hold the primitives' boxes. */
+typedef struct element {
+	int v[3];
+	int material;
+	uint8_t size;         /* vertices: 1, 2 or 3 */
+	uint8_t own_vertices; /* bit k: v[k] */
+	uint8_t own_edges;    /* bit k: edge v[k] - v[(k + 1) % size] (a segment has one) */
+} element;
+
+/* The elements of one object, with their own tree: objects meet pairwise through their trees,
+ * and only an object that collides with itself is traversed against itself. */
+typedef struct collision_object {
+	int first, count; /* its elements */
+	int material;
+	bool self;
+	plait_element_tree tree;
+	int features; /* a collider's: index of its first element's collider_features, or -1 */
+} collision_object;
+
+/* A rigid mesh collider's corners and edges (plait_collider.first). Each element's own vertices
+ * and edges as built, and for each the longest cloth edge below which it is left out of mesh
+ * contacts (smooth_reach): a corner or edge that smooth cannot reach between the vertices of so
+ * short a triangle held out of the collider by the collider pass (contact.c). */
+typedef struct collider_features {
+	uint8_t vertices, edges; /* as built (element.own_vertices, own_edges) */
+	float reach[6];          /* vertex k: reach[k]; edge k: reach[3 + k]; scene units */
+} collider_features;
+
+/* An element's box, centroid and normal at the gather, for its cheap rejections. */
+typedef struct element_shape {
+	vec3 lower, upper;
+	vec3 centre;
+	vec3 normal; /* triangles: unit normal (zero when degenerate) */
+} element_shape;
+
+typedef struct contact_pair {
+	int v[4];
+	uint8_t type;
+	uint8_t self;
+	float distance; /* contact distance, scene units */
+	float friction;
+	float side;     /* vertex-face: which side of the triangle's plane the vertex is on (+1, -1) */
+	vec3 direction; /* the others: unit vector from the second primitive to the first */
+	float scale[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
+	float lower;    /* rest pairs: a lower bound of their distance now, < 0 when unknown */
+} contact_pair;
+
+/* Listing on the workers (plait_mesh_contacts_gather_on_workers): a piece of a traversal, and its
+ * own list. */
+typedef struct gather_piece {
+	int a, b;    /* collision objects (a == b: self) */
+	int node[2]; /* the node pair in their trees */
+} gather_piece;
+
+typedef struct piece_list {
+	contact_pair *pairs;
+	int count, capacity;
+	bool full;
+	int features_kept, features_left_out;
+} piece_list;
+
+/* A crossing found by a failsafe sweep on a worker, joined into its impact zone afterwards on
+ * the calling thread, in the order the sweeps would have met it. */
+typedef struct sweep_hit {
+	int v[4];
+	int n;
+} sweep_hit;
+
+#define HIT_ROOM 4 /* crossings a piece of a sweep keeps; one that finds more (rare) is swept again */
+
+typedef struct plait_mesh_contacts {
+	int element_count;
+	element *elements;
+	float *element_reach;  /* an element's largest radius (at the last listing) */
+	float *element_guard;  /* an element's largest guard (at the last listing) */
+	element_shape *shapes; /* at the last listing */
+	vec3 *lower, *upper;   /* element boxes */
+	int object_count;
+	collision_object *objects;
+	/* Colliders' corners and edges left out where smooth (see
+	 * plait_mesh_contacts_build_collider_features): per filtered collider element its features;
+	 * per element of a cloth or curve that meets them its edge-connected neighbours (-1: none),
+	 * its longest edge's bound while the list serves, and the D its element pairs with colliders
+	 * are decided with. */
+	collider_features *features;
+	int (*neighbours)[3];
+	float *cloth_bound, *cloth_bound_scratch, *pair_reach;
+	int features_kept, features_left_out; /* at the last listing, over its element pairs */
+	/* Neighbours in the start shape. Within a self-colliding object, primitives closer than
+	 * their self-collision distance at the start (seed 000 §4.5) never push each other: that is
+	 * left to the object's own constraints. They may still not pass through each other: they
+	 * are the rest pairs, swept by the failsafe in every substep. Element pairs all of whose
+	 * primitive pairs share a vertex or are rest pairs are excluded whole: per element, a
+	 * sorted run of excluded_list from excluded_start[e] to excluded_start[e + 1]. */
+	int rest_count, rest_capacity;
+	struct contact_pair *rest_pairs;
+	int *excluded_start;
+	int *excluded_list;
+	bool active;
+	bool gathered;   /* the candidates of this substep are ready */
+	bool list_valid; /* the list of the last gather may serve again (see plait_mesh_contacts_list_covers) */
+	int pair_count, pair_capacity;
+	contact_pair *pairs;
+	bool out_of_memory;   /* the candidate list could not grow: a contact may be left to the failsafe */
+	int traversal_sweeps; /* primitive pairs swept by the failsafe's last traversal (0 before it) */
+	/* Listing on the workers (plait_mesh_contacts_gather_on_workers): the traversals' pieces, a
+	 * list each, and the length of the last list (to size the pieces' lists). */
+	int piece_count;
+	gather_piece *pieces;
+	int (*piece_nodes)[2]; /* scratch of plait_mesh_contacts_cut_pieces */
+	piece_list *piece_lists;
+	int last_listed;
+	/* The failsafe's sweeps on the workers (sweep_on_workers): per piece, its crossings (room for
+	 * HIT_ROOM), how many, the pairs it swept, and whether it ran out of room. */
+	sweep_hit *piece_hits;
+	int *piece_hit_count, *piece_swept;
+	bool *piece_full;
+	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
+	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
+	 * long as no vertex is farther than its guard from where it was then
+	 * (plait_mesh_contacts_list_covers). */
+	vec3 *x_gather;
+	float *guard;       /* per particle: how far it may move relative to its object */
+	int *object_of;     /* per particle: its collision object, or -1 */
+	vec3 *shift;        /* per collision object: mean motion since the gather (scratch) */
+	int *object_counts; /* per collision object: scratch of object_shifts */
+	float *allowance;   /* per pair of objects: how far they may move relative to each other */
+	float allowance_max;
+	/* Failsafe scratch: union-find over particles, and the particles it touched. */
+	int particle_capacity;
+	int *zone_parent;
+	int *touched;
+	int touched_count;
+	int (*members)[2]; /* (root, particle), sorted to walk zone by zone */
+} plait_mesh_contacts;
+
+/* The failsafe keeps primitives this far apart, scene units: a thousandth of a millimetre in
+ * metres, well above float rounding at the sizes of cloth and well below any thickness. */
+#define FAILSAFE_DISTANCE 1e-6f
+
+/* Pairs are listed within this many times their contact distance (plus their guards). */
+#define LIST_SCALE 1.1f
+
+/* The rounding allowance of the cheap distance bounds (mesh_contact_geometry.c) and of the
+ * element pair walk's rejections (mesh_contact_pairs.c), scene units. */
+#define REJECT_SLACK 1e-5f
+
+/* A listing's bound on a cloth edge near a filtered collider: this many times its length now. */
+#define CLOTH_EDGE_SLACK 1.1f
+
+typedef enum stage {
+	STAGE_REST, /* finding the rest pairs, from the start positions */
+	STAGE_GATHER,
+	STAGE_FAILSAFE,
+} stage;
+
+typedef struct pair_pass {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+	stage stage;
+	float failsafe_distance;
+	int hits;
+	float list_distance; /* STAGE_GATHER: of the element pair being visited */
+	float pair_slack;    /* STAGE_GATHER: how far its primitives may come closer (guards, allowance) */
+	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
+	 * (or shares a vertex); the element pairs that are, for the exclusion lists. */
+	bool all_rest;
+	int excluded_count, excluded_capacity;
+	int (*excluded)[2];
+	bool failed;
+	int swept; /* STAGE_FAILSAFE: primitive pairs swept */
+	/* STAGE_GATHER: where the listed pairs go; with fixed_capacity (on a worker, where the
+	 * allocator may not be called) a full list sets `full` instead of growing. */
+	contact_pair **out_pairs;
+	int *out_count, *out_capacity;
+	bool fixed_capacity, full;
+	int features_kept, features_left_out; /* STAGE_GATHER: see plait_mesh_contacts */
+	/* STAGE_FAILSAFE on a worker: crossings go here (room for HIT_ROOM; `full` past it) instead
+	 * of into the impact zones. */
+	sweep_hit *hits_out;
+	int hits_count;
+} pair_pass;
+
+/* Element pairs of two objects (or of one with itself), in global element numbers. */
+typedef struct object_pass {
+	pair_pass *pass;
+	int first_a, first_b;
+} object_pass;
+
+/* A pair's points, from a particle array (x_prev, x_start) or from the current positions. */
+static inline void gather_points(const vec3 *source, const int *v, int n, vec3 *out)
+{
+	for (int k = 0; k < n; ++k) {
+		out[k] = source[v[k]];
+	}
+}
+
+static inline void gather_current(const plait_point *point, const int *v, int n, vec3 *out)
+{
+	for (int k = 0; k < n; ++k) {
+		out[k] = point[v[k]].x;
+	}
+}
+
+/* mesh_contact_elements.c */
+
+/* Frees the elements, their objects and trees, and all that is sized by them. */
+void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allocator *a);
+
+/* The elements and objects of what collides, their trees, colliders' features and rest pairs;
+ * mc->active when anything can meet here. False only when out of memory. */
+bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc);
+
+/* The scratch sized by the particles (guards, gather positions, impact zones); false when out
+ * of memory. */
+bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *mc);
+
+/* mesh_contact_geometry.c: pair types and points as in contact_pair. */
+
+/* The distance between the pair's primitives at points x. */
+float plait_mesh_contacts_primitive_distance(int type, const vec3 *x);
+/* Whether the primitives, moving on straight lines from start to end, come within distance of
+ * each other (conservative: never a miss). */
+bool plait_mesh_contacts_paths_meet(int type, const vec3 *start, const vec3 *end, float distance);
+/* How much the distance between the primitives can change from start to end. */
+float plait_mesh_contacts_largest_motion(int type, const vec3 *start, const vec3 *end);
+/* Whether a lower bound of their distance over the substep exceeds distance. */
+bool plait_mesh_contacts_paths_apart(int type, const vec3 *start, const vec3 *end, float distance);
+
+/* mesh_contact_pairs.c */
+
+/* The element trees' callback for an object_pass: element pair (a, b) of its objects, visited
+ * as its pair_pass's stage asks. */
+void plait_mesh_contacts_visit_object_elements(int a, int b, void *context);
+
+/* mesh_contact_features.c */
+
+/* The smooth reaches of every rigid mesh collider's corners and edges, and the neighbours of the
+ * cloth elements that meet them (edges: the triangles' sorted edges); false when out of memory. */
+bool plait_mesh_contacts_build_collider_features(plait_sim *sim, plait_mesh_contacts *mc,
+                                                 const plait_triangle_edge *edges, int edge_count);
+/* Each cloth element's D against filtered colliders (mc->pair_reach); at a listing (slack > 1)
+ * also their bounds (mc->cloth_bound). */
+void plait_mesh_contacts_measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, float slack);
+/* Whether every cloth edge that meets filtered colliders is still within its bound. */
+bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_contacts *mc);
+/* The corners and edges of filtered collider element c that meet cloth element e (bits). */
+void plait_mesh_contacts_live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices,
+                                       uint8_t *edges);
+
+/* mesh_contact_listing.c */
+
+/* Element boxes, and the trees refitted to them: for the gather (paths false) or around the
+ * substep's paths grown by margin (the failsafe's traversal). */
+void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin);
+/* Whether objects a < b meet in mesh contacts. */
+bool plait_mesh_contacts_objects_meet(const plait_sim *sim, const plait_mesh_contacts *mc, int a, int b);
+/* How far objects a and b's boxes reach across in pass's stage (their allowance at a listing). */
+float plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b);
+/* Every pair of elements that may touch, handed to pass, on the calling thread. */
+void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pass);
+/* Lists the pairs that may touch into mc->pairs, with new guards and allowances. */
+void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc);
+/* Whether the list still holds every pair that can touch or cross (now, and with with_start at
+ * the substep's start). */
+bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start);
+
+/* mesh_contact_pieces.c */
+
+/* The scratch of the work on the workers: freed, or made once (false when out of memory). */
+void plait_mesh_contacts_free_pieces(plait_mesh_contacts *mc, const plait_allocator *a);
+bool plait_mesh_contacts_reserve_pieces(plait_mesh_contacts *mc, const plait_allocator *a);
+/* One piece of a traversal, its element pairs handed to pass. */
+void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, const gather_piece *piece);
+/* Cuts the traversals of stage `of` into mc->pieces; whether the cut is the last one's. */
+bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, stage of, int last_count);
+/* The gather's traversal on the workers; false (nothing listed) when it cannot run there. */
+bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass);
+
+/* mesh_contact_failsafe.c */
+
+/* The failsafe's test of one primitive pair, from the substep's start to now. */
+void plait_mesh_contacts_sweep_pair(pair_pass *pass, int type, const int *v);
+/* Forgets the rest pairs' carried distance bounds (when positions were moved). */
+void plait_mesh_contacts_forget_rest_bounds(plait_mesh_contacts *mc);
+
+#endif

@@ -1,0 +1,223 @@
+/* Listing the primitive pairs that may touch: element boxes, the traversal of objects through
+ * their trees, the gather, and how long its list covers (the guards). */
+#include "dynamics/mesh_contact_internal.h"
+
+#include "collision/closest.h"
+
+/* ---- Element boxes and the traversal of objects ---------------------------------------------- */
+
+/* Element boxes. For the gather: around the current positions, grown by LIST_SCALE times the
+ * element's reach plus its largest guard (a pair within its list distance has overlapping
+ * boxes). For the failsafe: around the paths of the substep, grown by `margin`. */
+void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin)
+{
+	const plait_particles *p = &sim->particles;
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		vec3 lower = p->point[el->v[0]].x, upper = lower;
+		float radius = 0.0f, guard = 0.0f;
+		for (int k = 0; k < el->size; ++k) {
+			int i = el->v[k];
+			lower = v3_min(lower, p->point[i].x);
+			upper = v3_max(upper, p->point[i].x);
+			if (paths) {
+				lower = v3_min(lower, p->x_prev[i]);
+				upper = v3_max(upper, p->x_prev[i]);
+			}
+			radius = plait_maxf(radius, p->radius[i]);
+			guard = plait_maxf(guard, mc->guard[i]);
+		}
+		float g = margin;
+		if (!paths) {
+			element_shape *shape = &mc->shapes[e];
+			shape->lower = lower;
+			shape->upper = upper;
+			vec3 c = p->point[el->v[0]].x;
+			for (int k = 1; k < el->size; ++k) {
+				c = v3_add(c, p->point[el->v[k]].x);
+			}
+			shape->centre = v3_scale(c, 1.0f / (float)el->size);
+			if (el->size == 3) {
+				vec3 t[3] = {p->point[el->v[0]].x, p->point[el->v[1]].x, p->point[el->v[2]].x};
+				shape->normal = plait_triangle_normal(t);
+			}
+			const plait_material *m = &sim->materials[el->material];
+			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
+			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
+			mc->element_reach[e] = radius;
+			mc->element_guard[e] = guard;
+		}
+		mc->lower[e] = v3_sub(lower, v3(g, g, g));
+		mc->upper[e] = v3_add(upper, v3(g, g, g));
+	}
+	if (mc->features != NULL) {
+		plait_mesh_contacts_measure_cloth_edges(sim, mc, paths ? 1.0f : CLOTH_EDGE_SLACK);
+	}
+	for (int k = 0; k < mc->object_count; ++k) {
+		collision_object *o = &mc->objects[k];
+		plait_element_tree_refit(&o->tree, mc->lower + o->first, mc->upper + o->first);
+	}
+}
+
+/* Whether objects a < b meet in mesh contacts. */
+bool plait_mesh_contacts_objects_meet(const plait_sim *sim, const plait_mesh_contacts *mc, int a, int b)
+{
+	const collision_object *oa = &mc->objects[a], *ob = &mc->objects[b];
+	if (!sim->settings.cloth_contacts) {
+		return false;
+	}
+	bool points_a = mc->elements[oa->first].size == 1, points_b = mc->elements[ob->first].size == 1;
+	if (points_a && points_b) {
+		return false; /* particle pairs (contact.c) */
+	}
+	const plait_material *ma = &sim->materials[oa->material], *mb = &sim->materials[ob->material];
+	bool collider_a = ma->type == PLAIT_OBJECT_COLLIDER, collider_b = mb->type == PLAIT_OBJECT_COLLIDER;
+	/* Colliders' surfaces (plait_collider.first) never push each other, nor cloth that meets
+	 * colliders with its vertices only (contact.c does that). */
+	return !((collider_a && collider_b) || (collider_a && mb->collider_flag == PLAIT_COLLIDE_VERTEX) ||
+	         (collider_b && ma->collider_flag == PLAIT_COLLIDE_VERTEX));
+}
+
+/* How far two objects' boxes reach across at a listing: their allowance. */
+float plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b)
+{
+	return pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : 0.0f;
+}
+
+/* Every pair of elements that may touch: each self-colliding object with itself, then each
+ * pair of objects that collide with each other. */
+void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pass)
+{
+	const plait_sim *sim = pass->sim;
+	for (int a = 0; a < mc->object_count; ++a) {
+		const collision_object *oa = &mc->objects[a];
+		vec3 *la = mc->lower + oa->first, *ua = mc->upper + oa->first;
+		object_pass self = {pass, oa->first, oa->first};
+		if (oa->self) {
+			plait_element_tree_pairs(&oa->tree, la, ua, plait_mesh_contacts_visit_object_elements, &self);
+		}
+		for (int b = a + 1; b < mc->object_count; ++b) {
+			if (!plait_mesh_contacts_objects_meet(sim, mc, a, b)) {
+				continue;
+			}
+			const collision_object *ob = &mc->objects[b];
+			object_pass between = {pass, oa->first, ob->first};
+			plait_element_tree_pairs_between(&oa->tree, la, ua, &ob->tree, mc->lower + ob->first,
+			                                 mc->upper + ob->first,
+			                                 plait_mesh_contacts_listing_margin(mc, pass, a, b),
+			                                 plait_mesh_contacts_visit_object_elements, &between);
+		}
+	}
+}
+
+/* ---- The gather and its guards --------------------------------------------------------------- */
+
+/* The mean motion of each collision object from the gather positions to `x` (a particle
+ * array: positions now, or at the substep's start), into mc->shift. */
+static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const vec3 *x_prev, bool at_start)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		mc->shift[k] = v3(0.0f, 0.0f, 0.0f);
+	}
+	int *counts = mc->object_counts;
+	for (int k = 0; k < mc->object_count; ++k) {
+		counts[k] = 0;
+	}
+	for (int i = 0; i < p->count; ++i) {
+		int o = mc->object_of[i];
+		if (o >= 0) {
+			vec3 x = at_start ? x_prev[i] : p->point[i].x;
+			mc->shift[o] = v3_add(mc->shift[o], v3_sub(x, mc->x_gather[i]));
+			counts[o] += 1;
+		}
+	}
+	for (int k = 0; k < mc->object_count; ++k) {
+		mc->shift[k] = v3_scale(mc->shift[k], 1.0f / (float)(counts[k] > 0 ? counts[k] : 1));
+	}
+}
+
+/* Each vertex's guard: how far it may move, relative to its object as a whole, before the list
+ * must be gathered again: its relative motion of this substep so far (so the substep's start
+ * is covered), a tenth of its radius (contact pushes) and a tenth of a millimetre in metres.
+ * Each pair of objects likewise may move relative to each other by their relative motion of
+ * the substep so far plus a tenth of a millimetre. Relative motion is what brings primitives
+ * together: a cloth falling fast keeps its list. */
+void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	mc->pair_count = 0;
+	mc->out_of_memory = false;
+	const plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		mc->x_gather[i] = p->point[i].x;
+	}
+	object_shifts(sim, mc, p->x_prev, true); /* minus the motion of the substep so far */
+	for (int i = 0; i < p->count; ++i) {
+		int o = mc->object_of[i];
+		vec3 motion = v3_sub(p->x_prev[i], p->point[i].x);
+		float relative = o >= 0 ? v3_length(v3_sub(motion, mc->shift[o])) : v3_length(motion);
+		mc->guard[i] = relative + 0.1f * p->radius[i] + 1e-4f;
+	}
+	mc->allowance_max = 0.0f;
+	for (int a = 0; a < mc->object_count; ++a) {
+		for (int b = 0; b < mc->object_count; ++b) {
+			float allow = v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
+			mc->allowance[a * mc->object_count + b] = allow;
+			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
+		}
+	}
+	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
+	pair_pass pass = {.sim = sim,
+	                  .mc = mc,
+	                  .stage = STAGE_GATHER,
+	                  .out_pairs = &mc->pairs,
+	                  .out_count = &mc->pair_count,
+	                  .out_capacity = &mc->pair_capacity};
+	if (!(sim->parallel.worker_count > 1 && plait_mesh_contacts_gather_on_workers(sim, mc, &pass))) {
+		plait_mesh_contacts_traverse_objects(mc, &pass);
+	}
+	mc->last_listed = mc->pair_count;
+	mc->features_kept = pass.features_kept;
+	mc->features_left_out = pass.features_left_out;
+	mc->list_valid = !mc->out_of_memory;
+}
+
+/* Whether the list still holds every pair that can touch or cross. True while, at the
+ * substep's start (with `with_start`) and now, every vertex is within its guard of where it
+ * was at the gather once its object's mean motion is taken out, and every pair of objects is
+ * within its allowance of where it was relative to the other. A pair not listed was then
+ * farther apart than LIST_SCALE times its contact distance plus its guards (and allowance),
+ * and distances do not change when things move together, so over any path between such
+ * positions it stays farther than LIST_SCALE times its contact distance. */
+bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start)
+{
+	if (!mc->list_valid) {
+		return false;
+	}
+	if (mc->features != NULL && !plait_mesh_contacts_cloth_edges_within_bounds(sim, mc)) {
+		return false; /* D of the colliders' corners and edges left out no longer holds */
+	}
+	const plait_particles *p = &sim->particles;
+	for (int when = with_start ? 0 : 1; when < 2; ++when) {
+		object_shifts(sim, mc, p->x_prev, when == 0);
+		for (int a = 0; a < mc->object_count; ++a) {
+			for (int b = a + 1; b < mc->object_count; ++b) {
+				if (v3_length(v3_sub(mc->shift[a], mc->shift[b])) > mc->allowance[a * mc->object_count + b]) {
+					return false;
+				}
+			}
+		}
+		for (int i = 0; i < p->count; ++i) {
+			int o = mc->object_of[i];
+			if (o < 0) {
+				continue;
+			}
+			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
+			vec3 relative = v3_sub(v3_sub(x, mc->x_gather[i]), mc->shift[o]);
+			if (v3_length_sq(relative) > mc->guard[i] * mc->guard[i]) {
+				return false;
+			}
+		}
+	}
+	return true;
+}

@@ -1,0 +1,454 @@
+/* Which primitive pairs exist: each element pair the traversals meet is walked for the primitive
+ * pairs it owns, and each of those is handled as the pass's stage asks (rest pairs, listing,
+ * the failsafe's sweep). */
+#include "dynamics/mesh_contact_internal.h"
+
+#include <string.h>
+
+#include "collision/closest.h"
+#include "dynamics/contact.h"
+
+static bool excluded(const plait_mesh_contacts *mc, int a, int b)
+{
+	if (mc->excluded_start == NULL) {
+		return false;
+	}
+	for (int k = mc->excluded_start[a]; k < mc->excluded_start[a + 1]; ++k) {
+		if (mc->excluded_list[k] >= b) {
+			return mc->excluded_list[k] == b;
+		}
+	}
+	return false;
+}
+
+static bool shares_vertex(const int *v, int n)
+{
+	for (int i = 0; i < n; ++i) {
+		for (int j = i + 1; j < n; ++j) {
+			if (v[i] == v[j]) {
+				return true;
+			}
+		}
+	}
+	return false;
+}
+
+static float mean_radius(const plait_particles *p, const int *v, int n)
+{
+	float sum = 0.0f;
+	for (int k = 0; k < n; ++k) {
+		sum += p->radius[v[k]];
+	}
+	return sum / (float)n;
+}
+
+static bool add_pair_to(plait_sim *sim, contact_pair **pairs, int *count, int *capacity,
+                        const contact_pair *pair)
+{
+	if (*count == *capacity) {
+		int bigger_capacity = *capacity < 256 ? 256 : 2 * *capacity;
+		contact_pair *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		if (bigger == NULL) {
+			return false;
+		}
+		if (*count > 0) {
+			memcpy(bigger, *pairs, sizeof *bigger * (size_t)*count);
+		}
+		plait_free(&sim->allocator, *pairs);
+		*pairs = bigger;
+		*capacity = bigger_capacity;
+	}
+	(*pairs)[(*count)++] = *pair;
+	return true;
+}
+
+static bool add_pair(pair_pass *pass, const contact_pair *pair)
+{
+	if (pass->fixed_capacity && *pass->out_count == *pass->out_capacity) {
+		pass->full = true;
+		return false;
+	}
+	if (!add_pair_to(pass->sim, pass->out_pairs, pass->out_count, pass->out_capacity, pair)) {
+		pass->mc->out_of_memory = true;
+		return false;
+	}
+	return true;
+}
+
+/* Which side of the other primitive the first is on at the start of the substep. */
+static void start_side(contact_pair *pair, const vec3 *start, const vec3 *end)
+{
+	if (pair->type == PAIR_VERTEX_FACE) {
+		vec3 n = v3_cross(v3_sub(start[2], start[1]), v3_sub(start[3], start[1]));
+		float along = v3_dot(v3_sub(start[0], start[1]), n);
+		if (along == 0.0f) {
+			/* In the plane: the side it comes from is the one it moves away from. */
+			vec3 motion = v3_sub(v3_sub(end[0], start[0]), v3_sub(end[1], start[1]));
+			along = -v3_dot(motion, n);
+		}
+		pair->side = along < 0.0f ? -1.0f : 1.0f;
+		return;
+	}
+	vec3 first, second;
+	if (pair->type == PAIR_EDGE_EDGE) {
+		float s, t;
+		plait_closest_segments(start[0], start[1], start[2], start[3], &s, &t);
+		first = v3_lerp(start[0], start[1], s);
+		second = v3_lerp(start[2], start[3], t);
+	} else if (pair->type == PAIR_VERTEX_EDGE) {
+		first = start[0];
+		second = v3_lerp(start[1], start[2], plait_closest_on_segment(start[0], start[1], start[2]));
+	} else {
+		first = start[0];
+		second = start[1];
+	}
+	vec3 d = v3_sub(first, second);
+	float length = v3_length(d);
+	if (length > 0.0f) {
+		pair->direction = v3_scale(d, 1.0f / length);
+	} else if (pair->type == PAIR_EDGE_EDGE &&
+	           v3_length_sq(v3_cross(v3_sub(start[1], start[0]), v3_sub(start[3], start[2]))) > 0.0f) {
+		pair->direction = v3_normalize(v3_cross(v3_sub(start[1], start[0]), v3_sub(start[3], start[2])));
+	} else {
+		pair->direction = v3(0.0f, 1.0f, 0.0f);
+	}
+}
+
+/* A primitive pair met by the traversal: in the failsafe it is swept; in the gather stage it is
+ * listed when its paths may come within its list distance: as a contact, or (pairs that only
+ * the failsafe watches) as a pair to sweep at the end of the substep. */
+static void visit_primitives(pair_pass *pass, int type, const int *v, const plait_material *first,
+                             const plait_material *second, bool self)
+{
+	int n = pair_size[type];
+	if (shares_vertex(v, n)) {
+		return;
+	}
+	if (pass->stage == STAGE_FAILSAFE) {
+		plait_mesh_contacts_sweep_pair(pass, type, v);
+		return;
+	}
+	plait_sim *sim = pass->sim;
+	plait_mesh_contacts *mc = pass->mc;
+	plait_particles *p = &sim->particles;
+	int first_count = type == PAIR_EDGE_EDGE ? 2 : 1;
+	if (pass->stage == STAGE_REST) {
+		float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+		if (self) {
+			distance *= first->self_width_scale;
+		}
+		vec3 initial[4] = {{0}};
+		gather_points(p->x_start, v, n, initial);
+		float rest = plait_mesh_contacts_primitive_distance(type, initial);
+		if (rest >= distance) {
+			pass->all_rest = false;
+			return;
+		}
+		if (type == PAIR_VERTEX_VERTEX) {
+			return; /* no crossing to watch */
+		}
+		contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
+		                     (uint8_t)type,
+		                     1,
+		                     0.0f,
+		                     0.0f,
+		                     1.0f,
+		                     {0.0f, 1.0f, 0.0f},
+		                     {1.0f, 1.0f},
+		                     -1.0f};
+		if (!add_pair_to(sim, &mc->rest_pairs, &mc->rest_count, &mc->rest_capacity, &pair)) {
+			pass->failed = true;
+		}
+		return;
+	}
+	float list_distance = pass->list_distance;
+	float now = 0.0f;
+	vec3 start[4] = {{0}}, end[4] = {{0}};
+	gather_current(p->point, v, n, end);
+	/* Boxes first: most pairs of neighbouring elements are rejected without a distance. */
+	vec3 lower_a = end[0], upper_a = end[0], lower_b = end[first_count], upper_b = end[first_count];
+	for (int k = 1; k < n; ++k) {
+		if (k < first_count) {
+			lower_a = v3_min(lower_a, end[k]);
+			upper_a = v3_max(upper_a, end[k]);
+		} else {
+			lower_b = v3_min(lower_b, end[k]);
+			upper_b = v3_max(upper_b, end[k]);
+		}
+	}
+	if (lower_a.x - upper_b.x > list_distance || lower_b.x - upper_a.x > list_distance ||
+	    lower_a.y - upper_b.y > list_distance || lower_b.y - upper_a.y > list_distance ||
+	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance ||
+	    (now = plait_mesh_contacts_primitive_distance(type, end)) > list_distance) {
+		return;
+	}
+	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+	if (self) {
+		distance *= first->self_width_scale;
+	}
+	if (self && distance > 0.0f) {
+		/* A rest pair: the failsafe watches it (mc->rest_pairs); no contact. */
+		vec3 initial[4] = {{0}};
+		gather_points(p->x_start, v, n, initial);
+		if (plait_mesh_contacts_primitive_distance(type, initial) < distance) {
+			return;
+		}
+	}
+	gather_points(p->x_prev, v, n, start);
+	contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
+	                     (uint8_t)type,
+	                     (uint8_t)self,
+	                     distance,
+	                     plait_combined_friction(first->friction, second->friction),
+	                     1.0f,
+	                     {0.0f, 1.0f, 0.0f},
+	                     {1.0f, 1.0f},
+	                     -1.0f};
+	/* The thickness between two primitives never exceeds their separation at the start frame
+	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
+	 * one object such pairs are rest pairs.) */
+	if (distance > 0.0f && !self) {
+		vec3 initial[4];
+		gather_points(p->x_start, v, n, initial);
+		pair.distance = plait_minf(distance, plait_mesh_contacts_primitive_distance(type, initial));
+	}
+	/* Edges whose closest points are an end of either are in reach of a vertex-face pair of
+	 * the triangles round that end: only the failsafe watches them. */
+	if (type == PAIR_EDGE_EDGE && pair.distance > 0.0f) {
+		float ps, pt;
+		plait_closest_segments(end[0], end[1], end[2], end[3], &ps, &pt);
+		if (ps <= 0.0f || ps >= 1.0f || pt <= 0.0f || pt >= 1.0f) {
+			pair.distance = 0.0f;
+		}
+	}
+	if (first->collision_layer != second->collision_layer) {
+		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
+	}
+	start_side(&pair, start, end);
+	/* While the list covers, the pair's vertices stay within their guards (and its objects
+	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
+	 * bound). */
+	pair.lower = now - pass->pair_slack;
+	(void)add_pair(pass, &pair);
+}
+
+static bool self_allows(const plait_material *m, int type)
+{
+	switch (m->self_flag) {
+	case PLAIT_SELF_COLLIDE_VERTEX:
+		return type == PAIR_VERTEX_VERTEX;
+	case PLAIT_SELF_COLLIDE_VERTEX_FACE:
+		return type == PAIR_VERTEX_FACE;
+	default:
+		return type == PAIR_VERTEX_FACE || type == PAIR_EDGE_EDGE;
+	}
+}
+
+/* Whether boxes [la, ua] and [lb, ub] are farther apart than `gap` along an axis. */
+static bool boxes_apart(vec3 la, vec3 ua, vec3 lb, vec3 ub, float gap)
+{
+	return la.x - ub.x > gap || lb.x - ua.x > gap || la.y - ub.y > gap || lb.y - ua.y > gap ||
+	       la.z - ub.z > gap || lb.z - ua.z > gap;
+}
+
+/* Whether a point is surely farther than `gap` from an element (its box, then a cheap bound). */
+static bool point_far(vec3 x, const element *el, const element_shape *shape, const vec3 *t, float gap)
+{
+	if (boxes_apart(x, x, shape->lower, shape->upper, gap)) {
+		return true;
+	}
+	float bound = el->size == 3   ? plait_point_triangle_gap(x, t, shape->centre, shape->normal)
+	              : el->size == 2 ? plait_segments_gap(x, x, t[0], t[1])
+	                              : v3_length(v3_sub(x, t[0]));
+	return bound - REJECT_SLACK > gap;
+}
+
+/* Whether segments p-q and r-s are surely farther apart than `gap`. */
+static bool segments_far(vec3 p, vec3 q, vec3 r, vec3 s, float gap)
+{
+	return boxes_apart(v3_min(p, q), v3_max(p, q), v3_min(r, s), v3_max(r, s), gap) ||
+	       plait_segments_gap(p, q, r, s) - REJECT_SLACK > gap;
+}
+
+/* Whether a vertex of material mv meets a triangle of material mo here. A collider's faces
+ * meet other objects' vertices in the collider pass (contact.c: continuous, with the trapped
+ * check); here they meet only their edges, and their corners the others' triangles. */
+static bool vertex_meets_face(const plait_material *mv, const plait_material *mo)
+{
+	return mo->type != PLAIT_OBJECT_COLLIDER || mv->type == PLAIT_OBJECT_COLLIDER;
+}
+
+static int bits3(unsigned bits)
+{
+	return (int)(bits & 1u) + (int)((bits >> 1) & 1u) + (int)((bits >> 2) & 1u);
+}
+
+/* The primitive pairs an element pair owns, each handed to visit_primitives. In the gather,
+ * most are rejected first from the elements' points (loaded once) and shapes, before
+ * visit_primitives loads them again for its exact test; the other stages see them all. The
+ * failsafe leaves vertex-vertex pairs out (nothing to cross). */
+static void walk_element_pair(pair_pass *pass, int a, int b, const plait_material *ma,
+                              const plait_material *mb, bool self)
+{
+	const element *ea = &pass->mc->elements[a], *eb = &pass->mc->elements[b];
+	bool cull = pass->stage == STAGE_GATHER, failsafe = pass->stage == STAGE_FAILSAFE;
+	const element_shape *shape[2] = {&pass->mc->shapes[a], &pass->mc->shapes[b]};
+	vec3 x[2][3] = {{{0}}};
+	if (cull) {
+		const plait_particles *p = &pass->sim->particles;
+		for (int k = 0; k < 3; ++k) {
+			x[0][k] = p->point[ea->v[k]].x;
+			x[1][k] = p->point[eb->v[k]].x;
+		}
+	}
+	float gap = pass->list_distance;
+	/* A filtered collider's corners and edges that its smooth reach keeps from this cloth's. */
+	uint8_t own_vertices[2] = {ea->own_vertices, eb->own_vertices},
+	        own_edges[2] = {ea->own_edges, eb->own_edges};
+	const plait_mesh_contacts *mc = pass->mc;
+	int collider = self                                ? -1
+	               : ma->type == PLAIT_OBJECT_COLLIDER ? 0
+	               : mb->type == PLAIT_OBJECT_COLLIDER ? 1
+	                                                   : -1;
+	if (collider >= 0) {
+		int all = bits3(own_vertices[collider]) + bits3(own_edges[collider]);
+		if (mc->features != NULL &&
+		    mc->objects[mc->object_of[(collider == 0 ? ea : eb)->v[0]]].features >= 0) {
+			uint8_t vertices, edges;
+			plait_mesh_contacts_live_features(mc, collider == 0 ? a : b, collider == 0 ? b : a, &vertices,
+			                                  &edges);
+			own_vertices[collider] &= vertices;
+			own_edges[collider] &= edges;
+		}
+		if (pass->stage == STAGE_GATHER) {
+			int kept = bits3(own_vertices[collider]) + bits3(own_edges[collider]);
+			pass->features_kept += kept;
+			pass->features_left_out += all - kept;
+		}
+	}
+	int v[4];
+	for (int turn = 0; turn < 2; ++turn) {
+		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
+		const element_shape *os = shape[1 - turn];
+		const vec3 *vx = x[turn], *ox = x[1 - turn];
+		const plait_material *mv = turn == 0 ? ma : mb, *mo = turn == 0 ? mb : ma;
+		for (int k = 0; k < vertex_side->size; ++k) {
+			if (!(own_vertices[turn] & (1u << k))) {
+				continue;
+			}
+			v[0] = vertex_side->v[k];
+			/* A vertex of the other element (neighbours in one object): every pair with it
+			 * but one vertex-vertex pair shares a vertex, which visit_primitives passes over;
+			 * skipped here before any distance. */
+			bool shared = self && (v[0] == other->v[0] || v[0] == other->v[1] || v[0] == other->v[2]);
+			if (shared && !(turn == 0 && self_allows(ma, PAIR_VERTEX_VERTEX))) {
+				continue;
+			}
+			bool far = cull && !shared && point_far(vx[k], other, os, ox, gap);
+			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
+			    vertex_meets_face(mv, mo) && !far && !shared) {
+				v[1] = other->v[0];
+				v[2] = other->v[1];
+				v[3] = other->v[2];
+				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
+			}
+			if (other->size == 2 && vertex_side->size == 1 && !far && !shared) {
+				v[1] = other->v[0];
+				v[2] = other->v[1];
+				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
+			}
+			if (turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX) && !far) {
+				for (int m = 0; m < other->size; ++m) {
+					if ((other->own_vertices & (1u << m)) &&
+					    !(cull && boxes_apart(vx[k], vx[k], ox[m], ox[m], gap))) {
+						v[1] = other->v[m];
+						visit_primitives(pass, PAIR_VERTEX_VERTEX, v, mv, mo, self);
+					}
+				}
+			}
+		}
+	}
+	if (ea->size >= 2 && eb->size >= 2 && (!self || self_allows(ma, PAIR_EDGE_EDGE))) {
+		int edges_a = ea->size == 2 ? 1 : 3, edges_b = eb->size == 2 ? 1 : 3;
+		for (int i = 0; i < edges_a; ++i) {
+			if (!(own_edges[0] & (1u << i))) {
+				continue;
+			}
+			int i1 = i + 1 < ea->size ? i + 1 : 0;
+			for (int j = 0; j < edges_b; ++j) {
+				int j1 = j + 1 < eb->size ? j + 1 : 0;
+				if (!(own_edges[1] & (1u << j))) {
+					continue;
+				}
+				/* Edges with an end in common (neighbours): passed over before any distance. */
+				if (self && (ea->v[i] == eb->v[j] || ea->v[i] == eb->v[j1] || ea->v[i1] == eb->v[j] ||
+				             ea->v[i1] == eb->v[j1])) {
+					continue;
+				}
+				if (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap)) {
+					continue;
+				}
+				v[0] = ea->v[i];
+				v[1] = ea->v[i1];
+				v[2] = eb->v[j];
+				v[3] = eb->v[j1];
+				visit_primitives(pass, PAIR_EDGE_EDGE, v, ma, mb, self);
+			}
+		}
+	}
+}
+
+static void visit_elements(int a, int b, void *context)
+{
+	pair_pass *pass = context;
+	const plait_mesh_contacts *mc = pass->mc;
+	const element *ea = &mc->elements[a], *eb = &mc->elements[b];
+	const plait_material *ma = &pass->sim->materials[ea->material];
+	const plait_material *mb = &pass->sim->materials[eb->material];
+	bool self = ma->object == mb->object;
+	if (self && excluded(mc, a, b)) {
+		return;
+	}
+	pass->all_rest = true;
+	if (pass->stage == STAGE_GATHER) {
+		/* One list distance for every primitive pair of the two elements, from their largest
+		 * radii and guards: a little generous, and no lookups per primitive pair. */
+		float scale = self ? ma->self_width_scale : 1.0f;
+		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
+		                      mc->element_guard[a] + mc->element_guard[b] + 2.0f * FAILSAFE_DISTANCE;
+		pass->pair_slack = mc->element_guard[a] + mc->element_guard[b];
+		if (!self) {
+			float allowance =
+			    mc->allowance[mc->object_of[ea->v[0]] * mc->object_count + mc->object_of[eb->v[0]]];
+			pass->list_distance += allowance;
+			pass->pair_slack += allowance;
+		}
+	}
+	walk_element_pair(pass, a, b, ma, mb, self);
+	if (pass->stage == STAGE_REST && pass->all_rest && !pass->failed) {
+		if (pass->excluded_count + 2 > pass->excluded_capacity) {
+			int capacity = pass->excluded_capacity < 1024 ? 1024 : 2 * pass->excluded_capacity;
+			int(*bigger)[2] = plait_alloc_zero(&pass->sim->allocator, (size_t)capacity, sizeof *bigger);
+			if (bigger == NULL) {
+				pass->failed = true;
+				return;
+			}
+			if (pass->excluded_count > 0) {
+				memcpy(bigger, pass->excluded, sizeof *bigger * (size_t)pass->excluded_count);
+			}
+			plait_free(&pass->sim->allocator, pass->excluded);
+			pass->excluded = bigger;
+			pass->excluded_capacity = capacity;
+		}
+		pass->excluded[pass->excluded_count][0] = a;
+		pass->excluded[pass->excluded_count++][1] = b;
+		pass->excluded[pass->excluded_count][0] = b;
+		pass->excluded[pass->excluded_count++][1] = a;
+	}
+}
+
+void plait_mesh_contacts_visit_object_elements(int a, int b, void *context)
+{
+	const object_pass *o = context;
+	visit_elements(o->first_a + a, o->first_b + b, o->pass);
+}

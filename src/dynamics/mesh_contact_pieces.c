@@ -1,0 +1,204 @@
+/* Listing on the workers. The traversals of plait_mesh_contacts_traverse_objects, cut into pieces
+ * (node pairs a few splits down), list side by side, each into a list of its own, and the lists
+ * are joined in piece order: the list is the one plait_mesh_contacts_traverse_objects makes, pair
+ * for pair, whatever the number of workers. A worker may not call the allocator (its hooks need
+ * not be thread-safe): each piece's list is given room first, and a piece that runs out of it is
+ * listed again on the calling thread. */
+#include "dynamics/mesh_contact_internal.h"
+
+#include <string.h>
+
+/* The scratch of the listing and the failsafe's sweeps on the workers
+ * (plait_mesh_contacts_gather_on_workers, sweep_on_workers). */
+void plait_mesh_contacts_free_pieces(plait_mesh_contacts *mc, const plait_allocator *a)
+{
+	if (mc->piece_lists != NULL) {
+		for (int k = 0; k < MAX_PIECES; ++k) {
+			plait_free(a, mc->piece_lists[k].pairs);
+		}
+	}
+	plait_free(a, mc->pieces);
+	plait_free(a, mc->piece_nodes);
+	plait_free(a, mc->piece_lists);
+	plait_free(a, mc->piece_hits);
+	plait_free(a, mc->piece_hit_count);
+	plait_free(a, mc->piece_swept);
+	plait_free(a, mc->piece_full);
+	mc->pieces = NULL;
+	mc->piece_nodes = NULL;
+	mc->piece_lists = NULL;
+	mc->piece_hits = NULL;
+	mc->piece_hit_count = mc->piece_swept = NULL;
+	mc->piece_full = NULL;
+	mc->piece_count = 0;
+}
+
+/* That scratch, made once, all of it or none; false when out of memory. */
+bool plait_mesh_contacts_reserve_pieces(plait_mesh_contacts *mc, const plait_allocator *a)
+{
+	if (mc->pieces != NULL) {
+		return true;
+	}
+	mc->pieces = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->pieces);
+	mc->piece_nodes = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_nodes);
+	mc->piece_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->piece_lists);
+	mc->piece_hits = plait_alloc_zero(a, (size_t)MAX_PIECES * HIT_ROOM, sizeof *mc->piece_hits);
+	mc->piece_hit_count = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
+	mc->piece_swept = plait_alloc_zero(a, MAX_PIECES, sizeof(int));
+	mc->piece_full = plait_alloc_zero(a, MAX_PIECES, sizeof(bool));
+	if (mc->pieces == NULL || mc->piece_nodes == NULL || mc->piece_lists == NULL || mc->piece_hits == NULL ||
+	    mc->piece_hit_count == NULL || mc->piece_swept == NULL || mc->piece_full == NULL) {
+		plait_mesh_contacts_free_pieces(mc, a);
+		return false;
+	}
+	return true;
+}
+
+typedef struct piece_job {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+} piece_job;
+
+void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, const gather_piece *piece)
+{
+	const collision_object *oa = &mc->objects[piece->a], *ob = &mc->objects[piece->b];
+	bool self = piece->a == piece->b;
+	object_pass o = {pass, oa->first, ob->first};
+	plait_element_tree_piece_pairs(&oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree,
+	                               mc->lower + ob->first, mc->upper + ob->first, self,
+	                               self ? 0.0f
+	                                    : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
+	                               piece->node, plait_mesh_contacts_visit_object_elements, &o);
+}
+
+static void list_pieces(void *context, int begin, int end)
+{
+	piece_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	for (int k = begin; k < end; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		list->count = 0;
+		pair_pass pass = {.sim = job->sim,
+		                  .mc = mc,
+		                  .stage = STAGE_GATHER,
+		                  .out_pairs = &list->pairs,
+		                  .out_count = &list->count,
+		                  .out_capacity = &list->capacity,
+		                  .fixed_capacity = true};
+		plait_mesh_contacts_list_piece(mc, &pass, &mc->pieces[k]);
+		list->full = pass.full;
+		list->features_kept = pass.features_kept;
+		list->features_left_out = pass.features_left_out;
+	}
+}
+
+/* Cuts the traversals of stage `of` into mc->pieces (piece_count 0 when they do not fit); returns
+ * whether the cut is the one before, which had last_count pieces. */
+bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *mc, stage of, int last_count)
+{
+	int(*nodes)[2] = mc->piece_nodes;
+	int count = 0;
+	bool fits = true, same = true;
+	for (int a = 0; a < mc->object_count && fits; ++a) {
+		for (int b = a; b < mc->object_count && fits; ++b) {
+			const collision_object *oa = &mc->objects[a], *ob = &mc->objects[b];
+			if ((a == b && !oa->self) || (a != b && !plait_mesh_contacts_objects_meet(sim, mc, a, b))) {
+				continue;
+			}
+			pair_pass margin_pass = {.stage = of};
+			int n = plait_element_tree_split(
+			    &oa->tree, &ob->tree, a == b,
+			    a == b ? 0.0f : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b), PIECE_DEPTH,
+			    nodes, MAX_PIECES - count);
+			fits = n >= 0;
+			for (int k = 0; k < n; ++k) {
+				gather_piece piece = {a, b, {nodes[k][0], nodes[k][1]}};
+				const gather_piece *was = &mc->pieces[count];
+				same = same && count < last_count && was->a == a && was->b == b &&
+				       was->node[0] == piece.node[0] && was->node[1] == piece.node[1];
+				mc->pieces[count++] = piece;
+			}
+		}
+	}
+	mc->piece_count = fits ? count : 0;
+	return fits && same && count == last_count;
+}
+
+/* The gather's traversal on the workers, into mc's list; false (nothing listed) when it cannot
+ * run there (out of memory, too many pieces): the caller then traverses on its own. */
+bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	const plait_allocator *a = &sim->allocator;
+	if (!plait_mesh_contacts_reserve_pieces(mc, a)) {
+		return false;
+	}
+	/* The first listing, with nothing to size the pieces' lists by, runs on the calling thread
+	 * (most pieces would fill their room and be listed twice); so does a listing much longer
+	 * than the traversal that makes it (pile: about 50 pairs an element, against 8 in
+	 * hang-self), where joining the pieces' lists costs more than a worker saves. */
+	if (mc->last_listed == 0 || mc->last_listed > 16 * mc->element_count) {
+		return false;
+	}
+	int last_count = mc->piece_count;
+	bool same_cut = plait_mesh_contacts_cut_pieces(sim, mc, STAGE_GATHER, last_count);
+	if (mc->piece_count == 0) {
+		return false;
+	}
+	/* Room for each piece: half as much again as it listed last time when the cut is the same
+	 * (a tree's node pairs change little from one listing to the next), else twice its share
+	 * of the last listing. */
+	for (int k = 0; k < mc->piece_count; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		int room = same_cut ? 64 + list->count + list->count / 2 : 64 + 2 * mc->last_listed / mc->piece_count;
+		if (list->capacity < room) {
+			contact_pair *bigger = plait_alloc_zero(a, (size_t)room, sizeof *bigger);
+			if (bigger == NULL) {
+				return false;
+			}
+			plait_free(a, list->pairs);
+			list->pairs = bigger;
+			list->capacity = room;
+		}
+	}
+	piece_job job = {sim, mc};
+	plait_parallel_for(&sim->parallel, list_pieces, &job, 0, mc->piece_count, 1);
+	int total = 0;
+	for (int k = 0; k < mc->piece_count; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		if (list->full) {
+			/* Again here, where its list may grow. */
+			list->count = 0;
+			pair_pass again = {.sim = sim,
+			                   .mc = mc,
+			                   .stage = STAGE_GATHER,
+			                   .out_pairs = &list->pairs,
+			                   .out_count = &list->count,
+			                   .out_capacity = &list->capacity};
+			plait_mesh_contacts_list_piece(mc, &again, &mc->pieces[k]);
+			list->features_kept = again.features_kept;
+			list->features_left_out = again.features_left_out;
+		}
+		pass->features_kept += list->features_kept;
+		pass->features_left_out += list->features_left_out;
+		total += list->count;
+	}
+	if (total > mc->pair_capacity) {
+		contact_pair *bigger = plait_alloc_zero(a, (size_t)total, sizeof *bigger);
+		if (bigger == NULL) {
+			mc->out_of_memory = true;
+			return true;
+		}
+		plait_free(a, mc->pairs);
+		mc->pairs = bigger;
+		mc->pair_capacity = total;
+	}
+	mc->pair_count = 0;
+	for (int k = 0; k < mc->piece_count; ++k) {
+		const piece_list *list = &mc->piece_lists[k];
+		if (list->count > 0) {
+			memcpy(mc->pairs + mc->pair_count, list->pairs, sizeof *list->pairs * (size_t)list->count);
+			mc->pair_count += list->count;
+		}
+	}
+	return true;
+}
