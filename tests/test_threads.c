@@ -8,6 +8,7 @@
 #include "test_cli.h"
 #include "test_support.h"
 #include "thread_pool.h"
+#include "world/world.h"
 
 #include <criterion/criterion.h>
 #include <dirent.h>
@@ -351,6 +352,78 @@ static plait_vec3 *tethered_positions(int worker_count, int *count)
 	test_grid_free(&grid);
 	plait_thread_pool_destroy(pool);
 	return x;
+}
+
+/* A cloth tethered to three pins (rows of two and of three tethers), meeting a sticky, bouncy
+ * sphere, a capsule and a floor with its vertices (colliders met forward and back), stepped
+ * with the substeps' closing tethers and collisions folded into the last particle pass
+ * (solver.c) or not. */
+static plait_vec3 *closing_pass_positions(int worker_count, bool fold, int *count)
+{
+	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
+	plait_world_def wdef = plait_default_world_def();
+	wdef.substeps = 4;
+	wdef.air_density = 0.0f; /* air comes between the passes: nothing folds */
+	plait_thread_pool_attach(pool, &wdef);
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	cr_assert(!plait_world_id_is_null(world));
+	world.world->sim.fold_closing_passes = fold;
+	plait_error error = {0};
+	int n = 40;
+	test_grid grid = test_grid_make(n, n, 2.0f, 2.0f);
+	int pins[3] = {0, n, (n / 2) * (n + 1)};
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+	cloth.bend_model = PLAIT_BEND_DISTANCE;
+	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
+	cloth.damp = 0.3f;
+	cloth.collision_flag = PLAIT_COLLIDE_VERTEX; /* triangles pushed out of round colliders do not fold */
+	cloth.pins = pins;
+	cloth.pin_count = 3;
+	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
+	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_SPHERE;
+	sphere.center = (plait_vec3){0.2f, -0.6f, 0.3f};
+	sphere.radius = 0.5f;
+	sphere.surface.bounce = 0.4f;
+	sphere.surface.stickiness = 0.3f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
+	plait_collider_def capsule = plait_default_collider_def();
+	capsule.shape = PLAIT_SHAPE_CAPSULE;
+	capsule.a = (plait_vec3){-0.8f, -0.9f, -0.2f};
+	capsule.b = (plait_vec3){0.6f, -0.7f, 0.4f};
+	capsule.radius = 0.2f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &capsule, &error)), "%s", error.message);
+	plait_collider_def floor = plait_default_collider_def();
+	floor.shape = PLAIT_SHAPE_PLANE;
+	floor.point = (plait_vec3){0.0f, -1.2f, 0.0f};
+	floor.normal = (plait_vec3){0.0f, 1.0f, 0.0f};
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &floor, &error)), "%s", error.message);
+	cr_assert(test_step_frames(world, 30));
+	cr_assert_eq(world.world->sim.folded_substeps > 0, fold, "substeps folded: %lld",
+	             world.world->sim.folded_substeps);
+	*count = grid.vertex_count;
+	plait_vec3 *x = malloc(sizeof *x * (size_t)*count);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, x, &error), PLAIT_OK, "%s", error.message);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+	plait_thread_pool_destroy(pool);
+	return x;
+}
+
+Test(threads, closing_passes_give_the_same_bits_folded_or_not, .timeout = 600)
+{
+	for (int workers = 1; workers <= 2; ++workers) {
+		int count_folded, count_apart;
+		plait_vec3 *folded = closing_pass_positions(workers, true, &count_folded);
+		plait_vec3 *apart = closing_pass_positions(workers, false, &count_apart);
+		cr_expect(memcmp(folded, apart, sizeof *folded * (size_t)count_folded) == 0,
+		          "folded closing passes change the positions (%d workers)", workers);
+		free(folded);
+		free(apart);
+	}
 }
 
 Test(threads, tethered_cloth_same_with_1_2_and_8_workers, .timeout = 600)

@@ -59,6 +59,13 @@ void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float
  * simd above scalar, rows of two held to pins run in AVX2 (tether_kernel.h), to the same bits. */
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_simd simd,
                          plait_parallel *parallel);
+/* Whether the tethers can be solved a range of particles at a time: every anchor pinned (each
+ * particle's tethers then write that particle alone) and the rows regrouped, in particle order. */
+bool plait_tethers_by_particle(const plait_tether_block *block);
+/* The tethers of particles [begin, end) alone, as plait_solve_tethers solves them (the same
+ * bits); only when plait_tethers_by_particle. */
+void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *points, plait_simd simd,
+                                      int begin, int end);
 /* For the frame to come: whether every tether's anchor is pinned (pins change between frames
  * only), and the solver's regrouping of the tethers, derived again if they changed. Out of
  * memory only costs speed: the tethers are then solved as they are stored. */

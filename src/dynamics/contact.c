@@ -390,18 +390,7 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 
 /* One collider against a range of particles: each particle on its own, so ranges run on
  * any worker with the same result. */
-typedef struct collider_job {
-	plait_sim *sim;
-	const plait_collider *c;
-	bool bounded;
-	vec3 world_lower, world_upper; /* box of the collider over the substep, grown */
-	vec3 ball_centre;              /* a ball holding the collider over the substep, grown */
-	float ball_radius;
-	bool still;         /* the same placement at both ends of the substep: surface velocity zero */
-	bool identity;      /* still, and shape space is world space: no transforms at all */
-	const int *indices; /* the particles to test, or NULL for all */
-	_Atomic int contacts;
-} collider_job;
+typedef plait_collider_job collider_job;
 
 /* Spheres, the commonest collider, a batch of particles at a time: the arithmetic runs lane by
  * lane over arrays with selects instead of branches, which the compiler turns into vector
@@ -811,10 +800,10 @@ static int push_triangles_out_of_round(const collider_job *job)
 
 #define COLLIDER_GRAIN 1024
 
-/* Particles indices[0, count) (all particles when indices is NULL) against collider c. */
-static int collide_with_collider(plait_sim *sim, const plait_collider *c, const int *indices, int count)
+/* What a pass of particles against collider c needs of it for the substep. */
+static void prepare_collider_job(plait_sim *sim, const plait_collider *c, const int *indices,
+                                 collider_job *job)
 {
-	plait_particles *p = &sim->particles;
 	const plait_rigid *r0 = &c->rigid_start, *r1 = &c->rigid_end;
 	/* Cull with the collider's world box over the substep (unbounded for planes), grown by the
 	 * thickest particle: most particles never reach the transforms and the sweep. */
@@ -861,8 +850,16 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c, const 
 			identity = identity && r->rotation.m[row][column] == (row == column ? 1.0f : 0.0f);
 		}
 	}
-	collider_job job = {sim,      c,       bounded, world_lower, world_upper, ball_centre, ball_radius, still,
-	                    identity, indices, 0};
+	*job = (collider_job){
+	    sim, c, bounded, world_lower, world_upper, ball_centre, ball_radius, still, identity, indices, 0};
+}
+
+/* Particles indices[0, count) (all particles when indices is NULL) against collider c. */
+static int collide_with_collider(plait_sim *sim, const plait_collider *c, const int *indices, int count)
+{
+	plait_particles *p = &sim->particles;
+	collider_job job;
+	prepare_collider_job(sim, c, indices, &job);
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
@@ -1074,6 +1071,71 @@ void plait_collide(plait_sim *sim)
 		}
 	}
 	sim->contacts += contacts;
+}
+
+/* Whether a cloth's triangles are pushed out of round colliders (push_triangles_out_of_round):
+ * a pass over triangles, not particles. */
+static bool pushes_triangles(const plait_sim *sim)
+{
+	for (int k = 0; k < sim->surface_count; ++k) {
+		const plait_material *mat = &sim->materials[sim->surfaces[k].material];
+		if (mat->type == PLAIT_OBJECT_CLOTH && mat->collide && mat->collider_flag != PLAIT_COLLIDE_VERTEX) {
+			return true;
+		}
+	}
+	return false;
+}
+
+bool plait_collider_pass_begin(plait_sim *sim, plait_collider_pass *pass)
+{
+	pass->count = 0;
+	pass->reverse_count = 0;
+	if (sim->particle_pairs_active || sim->mesh_contacts_active) {
+		return false;
+	}
+	bool round = false;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (!c->collide) {
+			continue;
+		}
+		/* A collider with vertices of its own moves them as pins at the next substep's start. */
+		if (c->count > 0 || pass->count == PLAIT_PASS_COLLIDERS) {
+			return false;
+		}
+		round = round || c->shape.type == PLAIT_SHAPE_SPHERE || c->shape.type == PLAIT_SHAPE_CAPSULE;
+		prepare_collider_job(sim, c, NULL, &pass->jobs[pass->count++]);
+	}
+	if (round && pushes_triangles(sim)) {
+		return false;
+	}
+	/* plait_collide's pass back over them: colliders collider_count - 2 down to 0; its contacts
+	 * are not counted. */
+	for (int j = pass->count - 1; j >= 0; --j) {
+		if (pass->jobs[j].c - sim->colliders <= sim->collider_count - 2) {
+			pass->reverse[pass->reverse_count] = pass->jobs[j];
+			atomic_init(&pass->reverse[pass->reverse_count].contacts, 0);
+			pass->reverse_count += 1;
+		}
+	}
+	return true;
+}
+
+void plait_collider_pass_range(plait_collider_pass *pass, int begin, int end)
+{
+	for (int j = 0; j < pass->count; ++j) {
+		collide_collider_range(&pass->jobs[j], begin, end);
+	}
+	for (int j = 0; j < pass->reverse_count; ++j) {
+		collide_collider_range(&pass->reverse[j], begin, end);
+	}
+}
+
+void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass)
+{
+	for (int j = 0; j < pass->count; ++j) {
+		sim->contacts += atomic_load_explicit(&pass->jobs[j].contacts, memory_order_relaxed);
+	}
 }
 
 int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count)

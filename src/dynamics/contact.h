@@ -28,6 +28,39 @@ bool plait_contacts_begin_substep(plait_sim *sim);
 /* One collision iteration. */
 void plait_collide(plait_sim *sim);
 
+/* A pass of particles against one collider in a substep: the collider's bounds over it. */
+typedef struct plait_collider_job {
+	plait_sim *sim;
+	const plait_collider *c;
+	bool bounded;
+	vec3 world_lower, world_upper; /* box of the collider over the substep, grown */
+	vec3 ball_centre;              /* a ball holding the collider over the substep, grown */
+	float ball_radius;
+	bool still;         /* the same placement at both ends of the substep: surface velocity zero */
+	bool identity;      /* still, and shape space is world space: no transforms at all */
+	const int *indices; /* the particles to test, or NULL for all */
+	_Atomic int contacts;
+} plait_collider_job;
+
+#define PLAIT_PASS_COLLIDERS 8
+
+/* A collision iteration a range of particles at a time, for the frame loop to fold into a pass
+ * over particles (solver.c): when the iteration is colliders only, each particle on its own
+ * (no particle pairs or mesh contacts, no cloth triangles pushed out of round colliders, no
+ * collider with vertices of its own, at most PLAIT_PASS_COLLIDERS colliders), every particle
+ * meets the colliders in plait_collide's order, with plait_collide's results. */
+typedef struct plait_collider_pass {
+	int count, reverse_count;
+	plait_collider_job jobs[PLAIT_PASS_COLLIDERS];
+	plait_collider_job reverse[PLAIT_PASS_COLLIDERS];
+} plait_collider_pass;
+
+/* False when the iteration cannot go particle by particle (then plait_collide). */
+bool plait_collider_pass_begin(plait_sim *sim, plait_collider_pass *pass);
+void plait_collider_pass_range(plait_collider_pass *pass, int begin, int end);
+/* Adds the pass's contacts to the frame's. */
+void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass);
+
 /* The collider part of an iteration for the particles indices[0, count) only (after the
  * failsafe moved them). */
 int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count);

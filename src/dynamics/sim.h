@@ -282,6 +282,10 @@ typedef struct plait_sim {
 	plait_schedule schedule;
 	bool schedule_dirty;
 	bool colouring_dirty; /* constraints were added or removed since they were last coloured */
+	/* Fold a substep's closing tethers and collisions into its last particle pass when they
+	 * allow it (solver.c, fold_closing_passes); always on but for tests comparing the two. */
+	bool fold_closing_passes;
+	long long folded_substeps; /* substeps that ran folded, since the sim was made (for tests) */
 
 	/* Scratch of the particle-pair stage (spatial hash and contacts). */
 	bool particle_pairs_active;

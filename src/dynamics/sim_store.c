@@ -32,6 +32,7 @@ void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
 	memset(sim, 0, sizeof *sim);
 	sim->allocator = *allocator;
 	sim->schedule_dirty = true;
+	sim->fold_closing_passes = true;
 }
 
 #define FREE_FIELD(object, field) plait_free(&sim->allocator, (object).field)

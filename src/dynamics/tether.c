@@ -251,6 +251,7 @@ typedef struct plait_tether_lanes {
 	int run_count;
 	tether_run *runs;
 	plait_tether_block others; /* the rows not of two (no lanes of its own) */
+	bool others_in_order;      /* others' particles never decrease (plait_tethers_by_particle) */
 } plait_tether_lanes;
 
 void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator *allocator)
@@ -352,6 +353,10 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 		}
 	}
 	others->capacity = others->count;
+	lanes->others_in_order = true;
+	for (int c = 1; c < others->count; ++c) {
+		lanes->others_in_order = lanes->others_in_order && others->pair[c][0] >= others->pair[c - 1][0];
+	}
 	qsort(keys, (size_t)rows, sizeof *keys, compare_rows);
 	for (int r = 0; r < rows; ++r) {
 		int first = keys[r].first;
@@ -629,4 +634,65 @@ void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, 
 	plait_parallel_for(parallel, lane_range, &rows, 0, lanes->count, TETHER_GRAIN);
 	tether_job others = {&lanes->others, particles->point, true, false};
 	plait_parallel_for(parallel, tether_range, &others, 0, lanes->others.count, TETHER_GRAIN);
+}
+
+bool plait_tethers_by_particle(const plait_tether_block *block)
+{
+	return block->count == 0 ||
+	       (block->fixed_anchors && block->lanes != NULL && block->lanes->others_in_order);
+}
+
+/* The first of values[first, last) (ascending) not below key. */
+static int lower_bound(const int *values, int first, int last, int key)
+{
+	while (first < last) {
+		int middle = first + (last - first) / 2;
+		if (values[middle] < key) {
+			first = middle + 1;
+		} else {
+			last = middle;
+		}
+	}
+	return first;
+}
+
+/* The first of the others' tethers whose particle is not below key (rows are whole). */
+static int others_bound(const plait_tether_block *others, int key)
+{
+	int first = 0, last = others->count;
+	while (first < last) {
+		int middle = first + (last - first) / 2;
+		if (others->pair[middle][0] < key) {
+			first = middle + 1;
+		} else {
+			last = middle;
+		}
+	}
+	return first;
+}
+
+void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *points, plait_simd simd,
+                                      int begin, int end)
+{
+	const plait_tether_lanes *lanes = block->lanes;
+	if (block->count == 0 || lanes == NULL) {
+		return;
+	}
+	/* Each run's rows are in particle order (compare_rows): the range's rows of a run are one
+	 * stretch of it. */
+	tether_job rows = {block, points, true, simd != PLAIT_SIMD_SCALAR};
+	for (int r = 0; r < lanes->run_count; ++r) {
+		const tether_run *run = &lanes->runs[r];
+		int first = lower_bound(lanes->particle, run->begin, run->end, begin);
+		int last = lower_bound(lanes->particle, first, run->end, end);
+		if (first < last) {
+			lane_range(&rows, first, last);
+		}
+	}
+	plait_tether_block *others = (plait_tether_block *)&lanes->others;
+	int first = others_bound(others, begin), last = others_bound(others, end);
+	if (first < last) {
+		tether_job job = {others, points, true, false};
+		tether_range(&job, first, last);
+	}
 }
