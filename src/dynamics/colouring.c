@@ -87,6 +87,8 @@ bool plait_colour_constraints(const plait_allocator *allocator, const int *verti
 		return true;
 	}
 	int regions = count / PLAIT_REGION_SIZE;
+	/* A multiple of 8 when there are several: 2, 4 or 8 workers then split them evenly. */
+	regions = regions >= 8 ? (regions + 7) / 8 * 8 : regions;
 	regions = regions < 1 ? 1 : regions > PLAIT_MAX_REGIONS ? PLAIT_MAX_REGIONS : regions;
 	/* Runs: at most PLAIT_MAX_COLOURS per slab, plus one per uncoloured constraint. */
 	size_t run_capacity =
