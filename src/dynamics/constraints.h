@@ -59,8 +59,10 @@ void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float
  * simd above scalar, rows of two held to pins run in AVX2 (tether_kernel.h), to the same bits. */
 void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, plait_simd simd,
                          plait_parallel *parallel);
-/* Whether the tethers can be solved a range of particles at a time: every anchor pinned (each
- * particle's tethers then write that particle alone) and the rows regrouped, in particle order. */
+/* Whether the tethers can be solved a range of particles at a time, side by side with other
+ * ranges' velocity updates: every anchor pinned (each particle's tethers then write that
+ * particle alone) and still over the frame (another range moving an anchor to its next target
+ * would change what this one reads), the rows regrouped, in particle order. */
 bool plait_tethers_by_particle(const plait_tether_block *block);
 /* The tethers of particles [begin, end) alone, as plait_solve_tethers solves them (the same
  * bits); only when plait_tethers_by_particle. */

@@ -138,13 +138,28 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 			vz = _mm256_blendv_ps(vz, oz, pinned);
 		}
 		store_vec3x8(p->v + i, vx, vy, vz);
-		scatter8(p->point, index, 8, x, y, z, w);
+		/* A pinned particle goes to its target in the same store: a tether anchored at it may be
+		 * read by another worker meanwhile (solver.c, folded_range), and must never see the
+		 * free particle's prediction computed in its lane. */
 		int pinned_lanes = _mm256_movemask_ps(pinned);
-		while (pinned_lanes != 0) {
-			int lane = __builtin_ctz((unsigned)pinned_lanes);
-			pinned_lanes &= pinned_lanes - 1;
-			p->point[i + lane].x = v3_lerp(p->pin_start[i + lane], p->pin_end[i + lane], k->t_end);
+		if (pinned_lanes != 0) {
+			_Alignas(32) float lx[8], ly[8], lz[8];
+			_mm256_store_ps(lx, x);
+			_mm256_store_ps(ly, y);
+			_mm256_store_ps(lz, z);
+			while (pinned_lanes != 0) {
+				int lane = __builtin_ctz((unsigned)pinned_lanes);
+				pinned_lanes &= pinned_lanes - 1;
+				vec3 target = v3_lerp(p->pin_start[i + lane], p->pin_end[i + lane], k->t_end);
+				lx[lane] = target.x;
+				ly[lane] = target.y;
+				lz[lane] = target.z;
+			}
+			x = _mm256_load_ps(lx);
+			y = _mm256_load_ps(ly);
+			z = _mm256_load_ps(lz);
 		}
+		scatter8(p->point, index, 8, x, y, z, w);
 	}
 	for (; i < end; ++i) {
 		if (ending) {

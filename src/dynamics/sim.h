@@ -176,6 +176,7 @@ typedef struct plait_tether_block {
 	float *length;
 	float *stiffness;
 	bool fixed_anchors;               /* every anchor pinned: set at each frame's start (plait_sim_step) */
+	bool still_anchors;               /* and none moves in the frame (its point is its pin's start and end) */
 	bool lanes_stale;                 /* pair[] changed since `lanes` was derived from it */
 	struct plait_tether_lanes *lanes; /* the solver's regrouping (tether.c); NULL until derived */
 } plait_tether_block;

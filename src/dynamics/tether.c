@@ -11,6 +11,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #define TETHER_GRAIN 2048
 _Static_assert(PLAIT_TETHER_ANCHORS <= 8, "a particle's tethers must fit a chunk's slack (MAX_ROW)");
@@ -600,11 +601,16 @@ static void tether_range(void *context, int begin, int end)
 void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles,
                                const plait_allocator *allocator)
 {
-	bool fixed_anchors = true;
+	bool fixed_anchors = true, still_anchors = true;
 	for (int c = 0; c < block->count && fixed_anchors; ++c) {
-		fixed_anchors = particles->point[block->pair[c][1]].w == 0.0f;
+		int anchor = block->pair[c][1];
+		fixed_anchors = particles->point[anchor].w == 0.0f;
+		/* Where it is, it stays over the frame (bit for bit: v3_lerp of equal ends is exact). */
+		vec3 x = particles->point[anchor].x, a = particles->pin_start[anchor], b = particles->pin_end[anchor];
+		still_anchors = still_anchors && memcmp(&x, &a, sizeof x) == 0 && memcmp(&a, &b, sizeof a) == 0;
 	}
 	block->fixed_anchors = fixed_anchors;
+	block->still_anchors = fixed_anchors && still_anchors;
 	if (block->lanes_stale || (fixed_anchors && block->lanes == NULL && block->count > 0)) {
 		block->lanes_stale = false;
 		if (!derive_lanes(block, allocator)) {
@@ -639,7 +645,7 @@ void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, 
 bool plait_tethers_by_particle(const plait_tether_block *block)
 {
 	return block->count == 0 ||
-	       (block->fixed_anchors && block->lanes != NULL && block->lanes->others_in_order);
+	       (block->still_anchors && block->lanes != NULL && block->lanes->others_in_order);
 }
 
 /* The first of values[first, last) (ascending) not below key. */
