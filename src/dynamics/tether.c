@@ -253,6 +253,8 @@ typedef struct plait_tether_lanes {
 	tether_run *runs;
 	plait_tether_block others; /* the rows not of two (no lanes of its own) */
 	bool others_in_order;      /* others' particles never decrease (plait_tethers_by_particle) */
+	int anchor_count;          /* the distinct anchors, for the checks at each frame's start */
+	int *anchors;
 } plait_tether_lanes;
 
 void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator *allocator)
@@ -270,6 +272,7 @@ void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator
 	plait_free(allocator, lanes->others.pair);
 	plait_free(allocator, lanes->others.length);
 	plait_free(allocator, lanes->others.stiffness);
+	plait_free(allocator, lanes->anchors);
 	plait_free(allocator, lanes);
 	block->lanes = NULL;
 }
@@ -290,6 +293,12 @@ static int compare_rows(const void *a, const void *b)
 		return x->anchor[1] < y->anchor[1] ? -1 : 1;
 	}
 	return x->particle < y->particle ? -1 : x->particle > y->particle;
+}
+
+static int compare_ints(const void *a, const void *b)
+{
+	int x = *(const int *)a, y = *(const int *)b;
+	return x < y ? -1 : x > y;
 }
 
 static int row_end(const plait_tether_block *block, int first)
@@ -329,9 +338,11 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 	lanes->others.pair = plait_alloc_zero(a, m, sizeof *lanes->others.pair);
 	lanes->others.length = plait_alloc_zero(a, m, sizeof(float));
 	lanes->others.stiffness = plait_alloc_zero(a, m, sizeof(float));
-	if (keys == NULL || lanes->particle == NULL || lanes->first == NULL || lanes->length[0] == NULL ||
-	    lanes->length[1] == NULL || lanes->stiffness == NULL || lanes->runs == NULL ||
-	    lanes->others.pair == NULL || lanes->others.length == NULL || lanes->others.stiffness == NULL) {
+	lanes->anchors = plait_alloc_zero(a, (size_t)(block->count > 0 ? block->count : 1), sizeof(int));
+	if (lanes->anchors == NULL || keys == NULL || lanes->particle == NULL || lanes->first == NULL ||
+	    lanes->length[0] == NULL || lanes->length[1] == NULL || lanes->stiffness == NULL ||
+	    lanes->runs == NULL || lanes->others.pair == NULL || lanes->others.length == NULL ||
+	    lanes->others.stiffness == NULL) {
 		plait_free(a, keys);
 		plait_tether_lanes_destroy(block, a);
 		return false;
@@ -354,6 +365,15 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 		}
 	}
 	others->capacity = others->count;
+	for (int c = 0; c < block->count; ++c) {
+		lanes->anchors[c] = block->pair[c][1];
+	}
+	qsort(lanes->anchors, (size_t)block->count, sizeof(int), compare_ints);
+	for (int c = 0; c < block->count; ++c) {
+		if (c == 0 || lanes->anchors[c] != lanes->anchors[c - 1]) {
+			lanes->anchors[lanes->anchor_count++] = lanes->anchors[c];
+		}
+	}
 	lanes->others_in_order = true;
 	for (int c = 1; c < others->count; ++c) {
 		lanes->others_in_order = lanes->others_in_order && others->pair[c][0] >= others->pair[c - 1][0];
@@ -601,9 +621,13 @@ static void tether_range(void *context, int begin, int end)
 void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles *particles,
                                const plait_allocator *allocator)
 {
+	/* Anchors are few and each is met by many tethers: once lanes are derived, their list of
+	 * distinct anchors is checked instead of every tether's. */
+	const plait_tether_lanes *lanes = block->lanes_stale ? NULL : block->lanes;
+	int checks = lanes != NULL ? lanes->anchor_count : block->count;
 	bool fixed_anchors = true, still_anchors = true;
-	for (int c = 0; c < block->count && fixed_anchors; ++c) {
-		int anchor = block->pair[c][1];
+	for (int c = 0; c < checks && fixed_anchors; ++c) {
+		int anchor = lanes != NULL ? lanes->anchors[c] : block->pair[c][1];
 		fixed_anchors = particles->point[anchor].w == 0.0f;
 		/* Where it is, it stays over the frame (bit for bit: v3_lerp of equal ends is exact). */
 		vec3 x = particles->point[anchor].x, a = particles->pin_start[anchor], b = particles->pin_end[anchor];
