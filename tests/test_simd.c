@@ -286,6 +286,9 @@ static void run_instruction_set_scene(bool air)
 		 * arrays and their constraints are renumbered (the vector kernels' point offsets too). */
 		test_grid small = test_grid_make(6, 6, 0.3f, 0.3f);
 		plait_cloth_def doomed_def = plait_default_cloth_def();
+		for (int i = 0; i < small.vertex_count; ++i) {
+			small.positions[i].y += 5.0f; /* far above the others: it meets nothing */
+		}
 		doomed_def.mesh = test_grid_mesh(&small);
 		doomed_def.stretch_resistance = doomed_def.compression_resistance = 10000.0f;
 		doomed_def.bend_model = PLAIT_BEND_DISTANCE;
