@@ -486,7 +486,8 @@ typedef struct tether_job {
 	plait_tether_block *block;
 	plait_point *points;
 	bool fixed_anchors;
-	bool avx2; /* lanes by plait_tether_rows_avx2 */
+	bool avx2;   /* lanes by plait_tether_rows_avx2 */
+	bool avx512; /* or by plait_tether_rows_avx512 */
 } tether_job;
 
 /* Rows [begin, end) of the lanes; each writes its own particle only. */
@@ -510,9 +511,13 @@ static void lane_range(void *context, int begin, int end)
 			for (int b = run_begin; b < run_end; b += LANE_BATCH) {
 				int count = run_end - b < LANE_BATCH ? run_end - b : LANE_BATCH;
 				int unfound[LANE_BATCH];
-				int missing = plait_tether_rows_avx2(points, lanes->particle + b, lanes->length[0] + b,
-				                                     lanes->length[1] + b, lanes->stiffness + b, a0, a1,
-				                                     count, (float)INSIDE_TOLERANCE, unfound);
+				int missing =
+				    job->avx512 ? plait_tether_rows_avx512(points, lanes->particle + b, lanes->length[0] + b,
+				                                           lanes->length[1] + b, lanes->stiffness + b, a0, a1,
+				                                           count, (float)INSIDE_TOLERANCE, unfound)
+				                : plait_tether_rows_avx2(points, lanes->particle + b, lanes->length[0] + b,
+				                                         lanes->length[1] + b, lanes->stiffness + b, a0, a1,
+				                                         count, (float)INSIDE_TOLERANCE, unfound);
 				for (int m = 0; m < missing; ++m) {
 					int first = lanes->first[b + unfound[m]];
 					project_row_exactly(block, points, first, first + 2);
@@ -650,19 +655,19 @@ void plait_solve_tethers(plait_tether_block *block, plait_particles *particles, 
 	 * particles can run side by side. An anchor set free since (its pin released) is written
 	 * too, and then they run in order, each tether on its own. */
 	if (!block->fixed_anchors) {
-		tether_job job = {block, particles->point, false, false};
+		tether_job job = {block, particles->point, false, false, false};
 		tether_range(&job, 0, block->count);
 		return;
 	}
 	if (block->lanes == NULL) {
-		tether_job job = {block, particles->point, true, false};
+		tether_job job = {block, particles->point, true, false, false};
 		plait_parallel_for(parallel, tether_range, &job, 0, block->count, TETHER_GRAIN);
 		return;
 	}
 	plait_tether_lanes *lanes = block->lanes;
-	tether_job rows = {block, particles->point, true, simd != PLAIT_SIMD_SCALAR};
+	tether_job rows = {block, particles->point, true, simd != PLAIT_SIMD_SCALAR, simd == PLAIT_SIMD_AVX512};
 	plait_parallel_for(parallel, lane_range, &rows, 0, lanes->count, TETHER_GRAIN);
-	tether_job others = {&lanes->others, particles->point, true, false};
+	tether_job others = {&lanes->others, particles->point, true, false, false};
 	plait_parallel_for(parallel, tether_range, &others, 0, lanes->others.count, TETHER_GRAIN);
 }
 
@@ -710,7 +715,7 @@ void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *po
 	}
 	/* Each run's rows are in particle order (compare_rows): the range's rows of a run are one
 	 * stretch of it. */
-	tether_job rows = {block, points, true, simd != PLAIT_SIMD_SCALAR};
+	tether_job rows = {block, points, true, simd != PLAIT_SIMD_SCALAR, simd == PLAIT_SIMD_AVX512};
 	for (int r = 0; r < lanes->run_count; ++r) {
 		const tether_run *run = &lanes->runs[r];
 		int first = lower_bound(lanes->particle, run->begin, run->end, begin);
@@ -722,7 +727,7 @@ void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *po
 	plait_tether_block *others = (plait_tether_block *)&lanes->others;
 	int first = others_bound(others, begin), last = others_bound(others, end);
 	if (first < last) {
-		tether_job job = {others, points, true, false};
+		tether_job job = {others, points, true, false, false};
 		tether_range(&job, first, last);
 	}
 }

@@ -14,6 +14,10 @@
 int plait_tether_rows_avx2(plait_point *points, const int *particle, const float *length0,
                            const float *length1, const float *stiffness, vec3 anchor0, vec3 anchor1,
                            int count, float tolerance, int *unfound);
+/* The same sixteen rows at a time in AVX-512 (tether_avx512.c), to the same bits. */
+int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
+                             const float *length1, const float *stiffness, vec3 anchor0, vec3 anchor1,
+                             int count, float tolerance, int *unfound);
 #endif
 
 #endif
