@@ -649,7 +649,10 @@ static void collide_collider_range(void *context, int begin, int end)
 		for (int chunk = begin; chunk < end; chunk += CULL_CHUNK) {
 			int size = end - chunk < CULL_CHUNK ? end - chunk : CULL_CHUNK, count = 0, whole = 0;
 #if PLAIT_X86_KERNELS
-			if (job->sim->simd != PLAIT_SIMD_SCALAR) {
+			if (job->sim->simd == PLAIT_SIMD_AVX512) {
+				whole = size & ~15;
+				count = plait_cull_particles_avx512(p, &bounds, chunk, whole, near);
+			} else if (job->sim->simd != PLAIT_SIMD_SCALAR) {
 				whole = size & ~7;
 				count = plait_cull_particles_avx2(p, &bounds, chunk, whole, near);
 			}

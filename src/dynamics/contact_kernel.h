@@ -20,6 +20,9 @@ typedef struct plait_collider_bounds {
  * runs AVX2. */
 int plait_cull_particles_avx2(const plait_particles *p, const plait_collider_bounds *bounds, int begin,
                               int count, int *near);
+/* The same sixteen at a time (count a multiple of 16), in AVX-512 (contact_avx512.c). */
+int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_bounds *bounds, int begin,
+                                int count, int *near);
 #endif
 
 #endif
