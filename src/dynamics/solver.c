@@ -160,6 +160,28 @@ static void folded_range(void *context, int begin, int end)
 	step_particles(&job->step, begin, end, true, job->beginning);
 }
 
+/* The substep's closing tethers and collisions with its velocity update, and the next
+ * substep's start when `beginning` (t_next: where that start's pins go). */
+static void run_folded_close(plait_sim *sim, const particle_job *job, plait_collider_pass *colliders,
+                             bool beginning, float t_next)
+{
+	sim->folded_substeps += 1;
+	folded_job folded = {*job, beginning, colliders, 0};
+	folded.step.t_end = t_next;
+	plait_parallel_for(&sim->parallel, folded_range, &folded, 0, sim->particles.count, PARTICLE_GRAIN);
+	plait_collider_pass_end(sim, colliders);
+	sim->constraint_solves += sim->tether.count;
+	/* Per worker, roughly: the workers ran the colliders side by side. */
+	sim->collision_seconds += 1e-9 * (double)atomic_load_explicit(&folded.collide_ns, memory_order_relaxed) /
+	                          (double)sim->parallel.worker_count;
+	if (beginning) {
+		/* Only transforms move: these colliders have no vertices (pins) of their own. */
+		plait_colliders_begin_substep(sim, job->t_end, t_next);
+	} else {
+		plait_contacts_end_substep(sim);
+	}
+}
+
 /* Whether substep events [first, last) close with one tether event and then one collision
  * event that can be folded into the particle pass (above). */
 static bool closes_foldably(const plait_sim *sim, const int *in_substep, int first, int last, bool air)
@@ -340,23 +362,8 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		/* The velocity update; with the next substep's start when nothing comes between. */
 		begun = s + 1 < substeps && !air && sim->pair_contact_count == 0;
 		if (fold) {
-			sim->folded_substeps += 1;
-			folded_job folded = {job, begun, &colliders, 0};
-			folded.step.t_end = begun ? (float)(s + 2) / (float)substeps : t1;
-			plait_parallel_for(&sim->parallel, folded_range, &folded, 0, sim->particles.count,
-			                   PARTICLE_GRAIN);
-			plait_collider_pass_end(sim, &colliders);
-			sim->constraint_solves += sim->tether.count;
-			/* Per worker, roughly: the workers ran the colliders side by side. */
-			sim->collision_seconds += 1e-9 *
-			                          (double)atomic_load_explicit(&folded.collide_ns, memory_order_relaxed) /
-			                          (double)sim->parallel.worker_count;
-			if (begun) {
-				/* Only transforms move: these colliders have no vertices (pins) of their own. */
-				plait_colliders_begin_substep(sim, t1, (float)(s + 2) / (float)substeps);
-			} else {
-				plait_contacts_end_substep(sim);
-			}
+			/* The closing tethers and collisions in the same pass (folded_range). */
+			run_folded_close(sim, &job, &colliders, begun, begun ? (float)(s + 2) / (float)substeps : t1);
 		} else if (begun) {
 			/* Colliders first: their vertices' targets for the next substep. */
 			plait_colliders_begin_substep(sim, t1, (float)(s + 2) / (float)substeps);
