@@ -68,5 +68,8 @@ static inline void plait_end_particle(const plait_particle_step *k, plait_partic
  * to the same bits. Only call when the processor runs AVX2 (plait_simd_supported). */
 void plait_step_particles_avx2(const plait_particle_step *k, plait_particles *p, int begin, int end,
                                bool ending, bool beginning);
+/* The same sixteen at a time (particle_avx512.c); only when the processor runs AVX-512F. */
+void plait_step_particles_avx512(const plait_particle_step *k, plait_particles *p, int begin, int end,
+                                 bool ending, bool beginning);
 
 #endif

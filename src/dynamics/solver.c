@@ -104,7 +104,11 @@ static inline void step_particles(const particle_job *job, int begin, int end, b
 	plait_particles *p = &job->sim->particles;
 #if PLAIT_X86_KERNELS
 	if (job->sim->simd != PLAIT_SIMD_SCALAR && !(beginning && job->air)) {
-		plait_step_particles_avx2(&k, p, begin, end, ending, beginning);
+		if (job->sim->simd == PLAIT_SIMD_AVX512) {
+			plait_step_particles_avx512(&k, p, begin, end, ending, beginning);
+		} else {
+			plait_step_particles_avx2(&k, p, begin, end, ending, beginning);
+		}
 		return;
 	}
 #endif
