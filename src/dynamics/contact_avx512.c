@@ -7,42 +7,7 @@
 #include <immintrin.h>
 #include <string.h>
 
-/* Points [i, i + 16): a register per coordinate (a 4x4 transpose in each 128-bit block, the
- * points loaded whole). */
-static inline void load_points16(const plait_point *points, int i, __m512 *x, __m512 *y, __m512 *z, __m512 *w)
-{
-	__m512 r[4];
-	for (int m = 0; m < 4; ++m) {
-		__m512 v = _mm512_castps128_ps512(_mm_load_ps(&points[i + m].x.x));
-		v = _mm512_insertf32x4(v, _mm_load_ps(&points[i + m + 4].x.x), 1);
-		v = _mm512_insertf32x4(v, _mm_load_ps(&points[i + m + 8].x.x), 2);
-		r[m] = _mm512_insertf32x4(v, _mm_load_ps(&points[i + m + 12].x.x), 3);
-	}
-	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]), t1 = _mm512_unpacklo_ps(r[2], r[3]);
-	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]), t3 = _mm512_unpackhi_ps(r[2], r[3]);
-	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
-}
-
-/* vec3s [from, from + 16) (48 floats): a register per coordinate, by two-source permutes. */
-static inline void load_vec3x16(const vec3 *from, __m512 *x, __m512 *y, __m512 *z)
-{
-	const float *f = &from->x;
-	__m512 a = _mm512_loadu_ps(f), b = _mm512_loadu_ps(f + 16), c = _mm512_loadu_ps(f + 32);
-	/* Coordinate k of point j is float 3 j + k: the first 32 floats come from a and b, the
-	 * rest from c (indices 16 and up of the second permute pick from c). */
-	const __m512i ab_x = _mm512_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21, 24, 27, 30, 0, 0, 0, 0, 0);
-	const __m512i ab_y = _mm512_setr_epi32(1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31, 0, 0, 0, 0, 0);
-	const __m512i ab_z = _mm512_setr_epi32(2, 5, 8, 11, 14, 17, 20, 23, 26, 29, 0, 0, 0, 0, 0, 0);
-	const __m512i c_x = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 17, 20, 23, 26, 29);
-	const __m512i c_y = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 18, 21, 24, 27, 30);
-	const __m512i c_z = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 16, 19, 22, 25, 28, 31);
-	*x = _mm512_permutex2var_ps(_mm512_permutex2var_ps(a, ab_x, b), c_x, c);
-	*y = _mm512_permutex2var_ps(_mm512_permutex2var_ps(a, ab_y, b), c_y, c);
-	*z = _mm512_permutex2var_ps(_mm512_permutex2var_ps(a, ab_z, b), c_z, c);
-}
+#include "dynamics/points_avx512.h"
 
 int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_bounds *bounds, int begin,
                                 int count, int *near)
@@ -63,8 +28,12 @@ int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_b
 		if (((flags[0] | flags[1]) & (0x0101010101010101ull * PLAIT_PARTICLE_COLLIDE)) == 0) {
 			continue;
 		}
+		int index[16];
+		for (int m = 0; m < 16; ++m) {
+			index[m] = i + m;
+		}
 		__m512 bx, by, bz, w, ax, ay, az;
-		load_points16(p->point, i, &bx, &by, &bz, &w);
+		gather16(p->point, index, &bx, &by, &bz, &w);
 		load_vec3x16(p->x_prev + i, &ax, &ay, &az);
 		/* path_may_reach, as contact_avx2.c. */
 		__mmask16 in_box = (__mmask16)(_mm512_cmp_ps_mask(_mm512_max_ps(ax, bx), lx, _CMP_GE_OQ) &

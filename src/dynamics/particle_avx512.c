@@ -8,76 +8,7 @@
 #include <immintrin.h>
 #include <string.h>
 
-/* Sixteen vec3 (48 floats) into a register per coordinate: coordinate k of vector j is float
- * 3 j + k; the first 32 floats are picked from a and b, the rest from c. */
-static inline void load_vec3x16(const vec3 *from, __m512 *x, __m512 *y, __m512 *z)
-{
-	const float *f = &from->x;
-	__m512 a = _mm512_loadu_ps(f), b = _mm512_loadu_ps(f + 16), c = _mm512_loadu_ps(f + 32);
-	const __m512i ab_x = _mm512_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21, 24, 27, 30, 0, 0, 0, 0, 0);
-	const __m512i ab_y = _mm512_setr_epi32(1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31, 0, 0, 0, 0, 0);
-	const __m512i ab_z = _mm512_setr_epi32(2, 5, 8, 11, 14, 17, 20, 23, 26, 29, 0, 0, 0, 0, 0, 0);
-	const __m512i c_x = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 17, 20, 23, 26, 29);
-	const __m512i c_y = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 18, 21, 24, 27, 30);
-	const __m512i c_z = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 16, 19, 22, 25, 28, 31);
-	*x = _mm512_permutex2var_ps(_mm512_permutex2var_ps(a, ab_x, b), c_x, c);
-	*y = _mm512_permutex2var_ps(_mm512_permutex2var_ps(a, ab_y, b), c_y, c);
-	*z = _mm512_permutex2var_ps(_mm512_permutex2var_ps(a, ab_z, b), c_z, c);
-}
-
-/* The inverse: float m of the 48 is coordinate m % 3 of vector m / 3. Each output register
- * picks from two coordinates first (indices 16 and up: the second), then the third. */
-static inline void store_vec3x16(vec3 *to, __m512 x, __m512 y, __m512 z)
-{
-	float *f = &to->x;
-	/* Floats 0-15: x0 y0 z0 x1 y1 z1 ... x5 (x and y from xy, z after). */
-	const __m512i a_xy = _mm512_setr_epi32(0, 16, 0, 1, 17, 0, 2, 18, 0, 3, 19, 0, 4, 20, 0, 5);
-	const __m512i a_z = _mm512_setr_epi32(0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15);
-	/* Floats 16-31: y5 z5 x6 y6 z6 ... x10 y10. */
-	const __m512i b_xy = _mm512_setr_epi32(21, 0, 6, 22, 0, 7, 23, 0, 8, 24, 0, 9, 25, 0, 10, 26);
-	const __m512i b_z = _mm512_setr_epi32(0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15);
-	/* Floats 32-47: z10 x11 y11 z11 ... x15 y15 z15. */
-	const __m512i c_xy = _mm512_setr_epi32(0, 11, 27, 0, 12, 28, 0, 13, 29, 0, 14, 30, 0, 15, 31, 0);
-	const __m512i c_z = _mm512_setr_epi32(26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31);
-	_mm512_storeu_ps(f, _mm512_permutex2var_ps(_mm512_permutex2var_ps(x, a_xy, y), a_z, z));
-	_mm512_storeu_ps(f + 16, _mm512_permutex2var_ps(_mm512_permutex2var_ps(x, b_xy, y), b_z, z));
-	_mm512_storeu_ps(f + 32, _mm512_permutex2var_ps(_mm512_permutex2var_ps(x, c_xy, y), c_z, z));
-}
-
-/* Points [i, i + 16) into a register per coordinate (a 4x4 transpose in each 128-bit block),
- * and back. */
-static inline void load_points16(const plait_point *points, int i, __m512 *x, __m512 *y, __m512 *z, __m512 *w)
-{
-	__m512 r[4];
-	for (int m = 0; m < 4; ++m) {
-		__m512 v = _mm512_castps128_ps512(_mm_load_ps(&points[i + m].x.x));
-		v = _mm512_insertf32x4(v, _mm_load_ps(&points[i + m + 4].x.x), 1);
-		v = _mm512_insertf32x4(v, _mm_load_ps(&points[i + m + 8].x.x), 2);
-		r[m] = _mm512_insertf32x4(v, _mm_load_ps(&points[i + m + 12].x.x), 3);
-	}
-	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]), t1 = _mm512_unpacklo_ps(r[2], r[3]);
-	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]), t3 = _mm512_unpackhi_ps(r[2], r[3]);
-	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
-}
-
-static inline void store_points16(plait_point *points, int i, __m512 x, __m512 y, __m512 z, __m512 w)
-{
-	__m512 t0 = _mm512_unpacklo_ps(x, y), t1 = _mm512_unpacklo_ps(z, w);
-	__m512 t2 = _mm512_unpackhi_ps(x, y), t3 = _mm512_unpackhi_ps(z, w);
-	__m512 r[4] = {_mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
-	for (int m = 0; m < 4; ++m) {
-		_mm_store_ps(&points[i + m].x.x, _mm512_castps512_ps128(r[m]));
-		_mm_store_ps(&points[i + m + 4].x.x, _mm512_extractf32x4_ps(r[m], 1));
-		_mm_store_ps(&points[i + m + 8].x.x, _mm512_extractf32x4_ps(r[m], 2));
-		_mm_store_ps(&points[i + m + 12].x.x, _mm512_extractf32x4_ps(r[m], 3));
-	}
-}
+#include "dynamics/points_avx512.h"
 
 static inline __attribute__((always_inline)) void step_range(const plait_particle_step *k, plait_particles *p,
                                                              int begin, int end, bool ending, bool beginning)
@@ -98,8 +29,12 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	const uint64_t on_plane_bits = 0x0101010101010101ull * PLAIT_PARTICLE_ON_PLANE;
 	int i = begin;
 	for (; i + 16 <= end; i += 16) {
+		int index[16];
+		for (int m = 0; m < 16; ++m) {
+			index[m] = i + m;
+		}
 		__m512 x, y, z, w;
-		load_points16(p->point, i, &x, &y, &z, &w);
+		gather16(p->point, index, &x, &y, &z, &w);
 		__mmask16 pinned = _mm512_cmp_ps_mask(w, zero, _CMP_EQ_OQ);
 		uint64_t flags[2];
 		memcpy(flags, p->flags + i, sizeof flags);
@@ -183,7 +118,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 			y = _mm512_load_ps(ly);
 			z = _mm512_load_ps(lz);
 		}
-		store_points16(p->point, i, x, y, z, w);
+		scatter16(p->point, index, 16, x, y, z, w);
 	}
 	for (; i < end; ++i) {
 		if (ending) {

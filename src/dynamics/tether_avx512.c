@@ -8,6 +8,8 @@
 #if PLAIT_X86_KERNELS
 #include <immintrin.h>
 
+#include "dynamics/points_avx512.h"
+
 typedef struct lanes3 {
 	__m512 x, y, z;
 } lanes3;
@@ -62,46 +64,6 @@ static inline __mmask16 within_reach16(lanes3 q, lanes3 anchor, __m512 length, _
 	return _mm512_cmp_ps_mask(dot3(d, d), _mm512_mul_ps(reach, reach), _CMP_LE_OQ);
 }
 
-/* Points index[0..16) into a register per coordinate (a 4x4 transpose in each 128-bit block). */
-static inline void gather16(const plait_point *points, const int *index, lanes3 *p, __m512 *w)
-{
-	__m512 r[4];
-	for (int m = 0; m < 4; ++m) {
-		__m512 v = _mm512_castps128_ps512(_mm_load_ps(&points[index[m]].x.x));
-		v = _mm512_insertf32x4(v, _mm_load_ps(&points[index[m + 4]].x.x), 1);
-		v = _mm512_insertf32x4(v, _mm_load_ps(&points[index[m + 8]].x.x), 2);
-		r[m] = _mm512_insertf32x4(v, _mm_load_ps(&points[index[m + 12]].x.x), 3);
-	}
-	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]), t1 = _mm512_unpacklo_ps(r[2], r[3]);
-	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]), t3 = _mm512_unpackhi_ps(r[2], r[3]);
-	p->x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	p->y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	p->z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
-}
-
-/* The inverse of gather16 for the first `count` lanes (lanes past a run's end repeat lane 0's
- * particle, which must not be written over). */
-static inline void scatter16(plait_point *points, const int *index, int count, lanes3 q, __m512 w)
-{
-	__m512 t0 = _mm512_unpacklo_ps(q.x, q.y), t1 = _mm512_unpacklo_ps(q.z, w);
-	__m512 t2 = _mm512_unpackhi_ps(q.x, q.y), t3 = _mm512_unpackhi_ps(q.z, w);
-	__m512 r[4] = {_mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
-	_Alignas(64) plait_point lanes[16];
-	for (int m = 0; m < 4; ++m) {
-		_mm_store_ps(&lanes[m].x.x, _mm512_castps512_ps128(r[m]));
-		_mm_store_ps(&lanes[m + 4].x.x, _mm512_extractf32x4_ps(r[m], 1));
-		_mm_store_ps(&lanes[m + 8].x.x, _mm512_extractf32x4_ps(r[m], 2));
-		_mm_store_ps(&lanes[m + 12].x.x, _mm512_extractf32x4_ps(r[m], 3));
-	}
-	for (int k = 0; k < count; ++k) {
-		_mm_store_ps(&points[index[k]].x.x, _mm_load_ps(&lanes[k].x.x));
-	}
-}
-
 int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
                              const float *length1, const float *stiffness, vec3 anchor0, vec3 anchor1,
                              int count, float tolerance, int *unfound)
@@ -125,7 +87,7 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		}
 		lanes3 p;
 		__m512 w;
-		gather16(points, index, &p, &w);
+		gather16(points, index, &p.x, &p.y, &p.z, &w);
 		__m512 l0 = _mm512_maskz_loadu_ps(lanes, length0 + b), l1 = _mm512_maskz_loadu_ps(lanes, length1 + b);
 		lanes3 d0 = sub3(p, a0), d1 = sub3(p, a1);
 		__m512 d0_sq = dot3(d0, d0), d1_sq = dot3(d1, d1);
@@ -153,7 +115,7 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 			/* Every taut row ends inside its other tether (tether_avx2.c). */
 			lanes3 q = select3(none, p, mul_add3(p, t, sub3(projected, p)));
 			q = select3(taut, q, p);
-			scatter16(points, index, n, q, w);
+			scatter16(points, index, n, q.x, q.y, q.z, w);
 			continue;
 		}
 		lanes3 from_o = select3(first_worst, d1, d0);
@@ -188,7 +150,7 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		__mmask16 found = (__mmask16)(none | within | onto_o_fits | circle_fits);
 		/* Written back: taut rows found here; the rest unchanged (the exact search reads them). */
 		q = select3((__mmask16)(taut & found), q, p);
-		scatter16(points, index, n, q, w);
+		scatter16(points, index, n, q.x, q.y, q.z, w);
 		unsigned missing = (unsigned)(taut & (__mmask16)~found);
 		while (missing != 0) {
 			int lane = __builtin_ctz(missing);
