@@ -540,6 +540,37 @@ Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
 	plait_destroy_world(world);
 }
 
+/* Two weightless sheets closing at 20 m/s (0.11 m a substep, against 2 cm of contact distance):
+ * a list gathered while they approach must hold the pairs that their motion brings into reach,
+ * and through each other, in the next substep too, which it serves while every vertex keeps to
+ * its straight path (mesh_contact_listing.c). The contacts then stop them; the failsafe never
+ * has to. */
+Test(collide, sheets_closing_steadily_meet_in_contacts_listed_a_substep_ahead)
+{
+	plait_world_id world = weightless_world();
+	plait_object_id lower = sheet(world, 10, 1.0f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 10, 0}, 0.01f, 0);
+	plait_object_id upper =
+	    sheet(world, 10, 1.0f, (plait_vec3){0.013f, 0.85f, 0.021f}, (plait_vec3){0, -10, 0}, 0.01f, 0);
+	int substeps = plait_world_get_def(world).substeps;
+	const plait_sim *sim = &world.world->sim;
+	/* Two frames of approach: the sheets are 0.18 m apart at their end. */
+	cr_assert(test_step_frames(world, 2));
+	long listings = plait_mesh_contacts_listings(sim);
+	cr_expect_leq(listings, substeps, "%ld lists in %d substeps of straight paths", listings, 2 * substeps);
+	int failsafe = 0;
+	for (int f = 0; f < 30; ++f) {
+		cr_assert(test_step_frames(world, 1));
+		failsafe += plait_world_get_stats(world).failsafe;
+		plait_intersection_report report;
+		plait_world_check_intersections(world, &report, NULL);
+		cr_assert_eq(report.triangle_pairs, 0, "frame %d: %d crossing triangle pairs", f + 3,
+		             report.triangle_pairs);
+	}
+	cr_expect_eq(failsafe, 0, "the failsafe stepped in %d times", failsafe);
+	cr_expect_gt(mean_y(upper), mean_y(lower), "the sheets passed through each other");
+	plait_destroy_world(world);
+}
+
 /* A sheet at rest and one moving into it at 1 m/s, weightless: who moves depends on layers. */
 static void push_between_layers(int resting_layer, int moving_layer, float *resting_moved, float *moving_end)
 {

@@ -58,6 +58,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->touched);
 	plait_free(a, mc->members);
 	plait_free(a, mc->x_gather);
+	plait_free(a, mc->motion);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	plait_mesh_contacts_free_pieces(mc, a);
@@ -70,6 +71,7 @@ void plait_mesh_contacts_begin_substep(plait_sim *sim)
 	plait_mesh_contacts *mc = sim->mesh_contacts;
 	if (mc != NULL) {
 		mc->gathered = false;
+		mc->substep_serial += 1;
 		if (sim->substep == 0) {
 			plait_mesh_contacts_forget_rest_bounds(mc); /* positions may have been set between frames */
 		}

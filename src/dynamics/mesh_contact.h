@@ -44,4 +44,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim);
  * scale of the other's triangles, left to the collider pass (for tests and benchmarks). */
 void plait_mesh_contacts_collider_features(const plait_sim *sim, int *kept, int *left_out);
 
+/* Lists gathered since the stage was made (for tests and benchmarks). */
+long plait_mesh_contacts_listings(const plait_sim *sim);
+
 #endif

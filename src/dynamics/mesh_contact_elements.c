@@ -11,6 +11,10 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	plait_free(a, mc->element_reach);
 	plait_free(a, mc->element_guard);
 	mc->element_guard = NULL;
+	plait_free(a, mc->element_motion);
+	mc->element_motion = NULL;
+	plait_free(a, mc->element_spread);
+	mc->element_spread = NULL;
 	plait_free(a, mc->shapes);
 	mc->shapes = NULL;
 	plait_free(a, mc->lower);
@@ -99,6 +103,8 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->elements = plait_alloc_zero(a, (size_t)count, sizeof *mc->elements);
 	mc->element_reach = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->element_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->element_spread = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->shapes = plait_alloc_zero(a, (size_t)count, sizeof *mc->shapes);
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
@@ -111,8 +117,8 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	bool active = false;
 	int edge_count = 0;
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
-	          mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL && edges != NULL &&
-	          owned != NULL && mc->objects != NULL;
+	          mc->element_motion != NULL && mc->element_spread != NULL && mc->shapes != NULL &&
+	          mc->lower != NULL && mc->upper != NULL && edges != NULL && owned != NULL && mc->objects != NULL;
 	if (ok) {
 		int e = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {
@@ -238,9 +244,11 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->touched);
 	plait_free(a, mc->members);
 	plait_free(a, mc->x_gather);
+	plait_free(a, mc->motion);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	mc->x_gather = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->object_of = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->list_valid = false;
@@ -248,7 +256,7 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->touched = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->members = plait_alloc_zero(a, (size_t)count, sizeof *mc->members);
 	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
-	    mc->guard == NULL || mc->object_of == NULL) {
+	    mc->motion == NULL || mc->guard == NULL || mc->object_of == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

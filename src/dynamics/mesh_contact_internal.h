@@ -109,6 +109,8 @@ typedef struct plait_mesh_contacts {
 	element *elements;
 	float *element_reach;  /* an element's largest radius (at the last listing) */
 	float *element_guard;  /* an element's largest guard (at the last listing) */
+	vec3 *element_motion;  /* the mean of its vertices' motions (at the last listing) */
+	float *element_spread; /* how far its vertices' motions are from that mean */
 	element_shape *shapes; /* at the last listing */
 	vec3 *lower, *upper;   /* element boxes */
 	int object_count;
@@ -151,16 +153,18 @@ typedef struct plait_mesh_contacts {
 	sweep_hit *piece_hits;
 	int *piece_hit_count, *piece_swept;
 	bool *piece_full;
-	/* The list holds every pair that was within LIST_SCALE times its contact distance plus the
-	 * guards of its vertices at the gather, so it holds every pair that can touch or cross as
-	 * long as no vertex is farther than its guard from where it was then
-	 * (plait_mesh_contacts_list_covers). */
+	/* The list holds every pair that can touch or cross as long as every vertex keeps within its
+	 * guard of the straight path it was on at the gather, for LIST_SUBSTEPS substeps after the
+	 * gather's (plait_mesh_contacts_gather, plait_mesh_contacts_list_covers). */
 	vec3 *x_gather;
-	float *guard;       /* per particle: how far it may move relative to its object */
-	int *object_of;     /* per particle: its collision object, or -1 */
-	vec3 *shift;        /* per collision object: mean motion since the gather (scratch) */
-	int *object_counts; /* per collision object: scratch of object_shifts */
-	float *allowance;   /* per pair of objects: how far they may move relative to each other */
+	vec3 *motion; /* per particle: its motion over the gather's substep, start to gather */
+	float *guard; /* per particle: how far it may stray from that path */
+	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
+	long listings;                      /* gathers since the stage was made */
+	int *object_of;                     /* per particle: its collision object, or -1 */
+	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
+	int *object_counts;                 /* per collision object: scratch of object_shifts */
+	float *allowance;                   /* per pair of objects: how far their boxes must reach across */
 	float allowance_max;
 	/* Failsafe scratch: union-find over particles, and the particles it touched. */
 	int particle_capacity;
@@ -176,6 +180,9 @@ typedef struct plait_mesh_contacts {
 
 /* Pairs are listed within this many times their contact distance (plus their guards). */
 #define LIST_SCALE 1.1f
+
+/* A list serves the substep of its gather and this many after it. */
+#define LIST_SUBSTEPS 1
 
 /* The rounding allowance of the cheap distance bounds (mesh_contact_geometry.c) and of the
  * element pair walk's rejections (mesh_contact_pairs.c), scene units. */

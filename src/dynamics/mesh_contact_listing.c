@@ -7,8 +7,9 @@
 /* ---- Element boxes and the traversal of objects ---------------------------------------------- */
 
 /* Element boxes. For the gather: around the current positions, grown by LIST_SCALE times the
- * element's reach plus its largest guard (a pair within its list distance has overlapping
- * boxes). For the failsafe: around the paths of the substep, grown by `margin`. */
+ * element's reach, its largest guard and how far its motion may take it from its object's
+ * (a pair within its list distance has overlapping boxes, see plait_mesh_contacts_gather).
+ * For the failsafe: around the paths of the substep, grown by `margin`. */
 void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin)
 {
 	const plait_particles *p = &sim->particles;
@@ -16,6 +17,21 @@ void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool
 		const element *el = &mc->elements[e];
 		vec3 lower = p->point[el->v[0]].x, upper = lower;
 		float radius = 0.0f, guard = 0.0f;
+		if (!paths) {
+			/* The element's motion and spread: the mean of its vertices' and the largest
+			 * distance from it. */
+			vec3 mean = mc->motion[el->v[0]];
+			for (int k = 1; k < el->size; ++k) {
+				mean = v3_add(mean, mc->motion[el->v[k]]);
+			}
+			mean = v3_scale(mean, 1.0f / (float)el->size);
+			float spread = 0.0f;
+			for (int k = 0; k < el->size; ++k) {
+				spread = plait_maxf(spread, v3_length(v3_sub(mc->motion[el->v[k]], mean)));
+			}
+			mc->element_motion[e] = mean;
+			mc->element_spread[e] = spread;
+		}
 		for (int k = 0; k < el->size; ++k) {
 			int i = el->v[k];
 			lower = v3_min(lower, p->point[i].x);
@@ -43,6 +59,16 @@ void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool
 			}
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
+			/* Swept along its vertices' paths relative to their object, from the substep's start
+			 * to LIST_SUBSTEPS substeps on. */
+			int o = mc->object_of[el->v[0]];
+			vec3 mean = o >= 0 ? mc->shift[o] : v3(0.0f, 0.0f, 0.0f); /* minus the object's */
+			for (int k = 0; k < el->size; ++k) {
+				vec3 x = p->point[el->v[k]].x, w = v3_add(mc->motion[el->v[k]], mean);
+				vec3 back = v3_sub(x, w), on = v3_mul_add(x, (float)LIST_SUBSTEPS, w);
+				lower = v3_min(lower, v3_min(back, on));
+				upper = v3_max(upper, v3_max(back, on));
+			}
 			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
 			mc->element_reach[e] = radius;
 			mc->element_guard[e] = guard;
@@ -137,31 +163,42 @@ static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const v
 	}
 }
 
-/* Each vertex's guard: how far it may move, relative to its object as a whole, before the list
- * must be gathered again: its relative motion of this substep so far (so the substep's start
- * is covered), a tenth of its radius (contact pushes) and a tenth of a millimetre in metres.
- * Each pair of objects likewise may move relative to each other by their relative motion of
- * the substep so far plus a tenth of a millimetre. Relative motion is what brings primitives
- * together: a cloth falling fast keeps its list. */
+/* The gather lists the pairs that can come within reach while every vertex keeps near the
+ * straight path it is on: its motion u over this substep so far (start to now), continued at
+ * the same pace for LIST_SUBSTEPS more substeps. A vertex may stray from that path by its guard:
+ * a quarter of its motion relative to its object's mean motion, gravity's bend of the path over
+ * the substeps the list serves, a tenth of its radius (contact pushes) and a tenth of a
+ * millimetre in metres. Over substeps [gather - 1, gather + LIST_SUBSTEPS] from now, vertices
+ * k and l then move relative to each other by at most LIST_SUBSTEPS |u_k - u_l| plus their
+ * guards, and so do any two points of two primitives (points of a primitive move by means of
+ * its vertices' motions); the element pair walk lists the pairs nearer than their contact
+ * distance plus that. Neighbours that move together (a cloth falling or swinging as a whole)
+ * then list only what is really close, and keep their list while they move steadily. */
 void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	mc->pair_count = 0;
 	mc->out_of_memory = false;
+	mc->gather_serial = mc->substep_serial;
+	mc->listings += 1;
 	const plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
 		mc->x_gather[i] = p->point[i].x;
+		mc->motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
 	}
-	object_shifts(sim, mc, p->x_prev, true); /* minus the motion of the substep so far */
+	object_shifts(sim, mc, p->x_prev, true); /* minus each object's mean motion */
+	float h = sim->substep_time, steps = (float)LIST_SUBSTEPS;
+	float bend = v3_length(sim->settings.gravity) * h * h * 0.5f * steps * (steps + 1.0f);
 	for (int i = 0; i < p->count; ++i) {
 		int o = mc->object_of[i];
-		vec3 motion = v3_sub(p->x_prev[i], p->point[i].x);
-		float relative = o >= 0 ? v3_length(v3_sub(motion, mc->shift[o])) : v3_length(motion);
-		mc->guard[i] = relative + 0.1f * p->radius[i] + 1e-4f;
+		float relative = o >= 0 ? v3_length(v3_add(mc->motion[i], mc->shift[o])) : v3_length(mc->motion[i]);
+		mc->guard[i] = 0.25f * relative + bend + 0.1f * p->radius[i] + 1e-4f;
 	}
+	/* Boxes reach across by their elements' motions relative to their objects' (fit_boxes) and
+	 * the objects' relative motion (here). */
 	mc->allowance_max = 0.0f;
 	for (int a = 0; a < mc->object_count; ++a) {
 		for (int b = 0; b < mc->object_count; ++b) {
-			float allow = v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
+			float allow = steps * v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
 			mc->allowance[a * mc->object_count + b] = allow;
 			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
 		}
@@ -182,16 +219,17 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->list_valid = !mc->out_of_memory;
 }
 
-/* Whether the list still holds every pair that can touch or cross. True while, at the
- * substep's start (with `with_start`) and now, every vertex is within its guard of where it
- * was at the gather once its object's mean motion is taken out, and every pair of objects is
- * within its allowance of where it was relative to the other. A pair not listed was then
- * farther apart than LIST_SCALE times its contact distance plus its guards (and allowance),
- * and distances do not change when things move together, so over any path between such
- * positions it stays farther than LIST_SCALE times its contact distance. */
+/* Whether the list still holds every pair that can touch or cross: within LIST_SUBSTEPS
+ * substeps of the gather's, every vertex within its guard of its path (see
+ * plait_mesh_contacts_gather) at the substep's start (with `with_start`) and now. A substep's
+ * paths run straight between those, so they keep as near the vertices' paths. */
 bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start)
 {
 	if (!mc->list_valid) {
+		return false;
+	}
+	long since = mc->substep_serial - mc->gather_serial;
+	if (since < 0 || since > LIST_SUBSTEPS) {
 		return false;
 	}
 	if (mc->features != NULL && !plait_mesh_contacts_cloth_edges_within_bounds(sim, mc)) {
@@ -199,25 +237,24 @@ bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *
 	}
 	const plait_particles *p = &sim->particles;
 	for (int when = with_start ? 0 : 1; when < 2; ++when) {
-		object_shifts(sim, mc, p->x_prev, when == 0);
-		for (int a = 0; a < mc->object_count; ++a) {
-			for (int b = a + 1; b < mc->object_count; ++b) {
-				if (v3_length(v3_sub(mc->shift[a], mc->shift[b])) > mc->allowance[a * mc->object_count + b]) {
-					return false;
-				}
-			}
-		}
+		/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
+		float along = (float)(since - 1 + when);
 		for (int i = 0; i < p->count; ++i) {
-			int o = mc->object_of[i];
-			if (o < 0) {
+			if (mc->object_of[i] < 0) {
 				continue;
 			}
 			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
-			vec3 relative = v3_sub(v3_sub(x, mc->x_gather[i]), mc->shift[o]);
-			if (v3_length_sq(relative) > mc->guard[i] * mc->guard[i]) {
+			vec3 stray = v3_sub(x, v3_mul_add(mc->x_gather[i], along, mc->motion[i]));
+			if (v3_length_sq(stray) > mc->guard[i] * mc->guard[i]) {
 				return false;
 			}
 		}
 	}
 	return true;
+}
+
+long plait_mesh_contacts_listings(const plait_sim *sim)
+{
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	return mc != NULL ? mc->listings : 0;
 }

@@ -414,15 +414,12 @@ static void visit_elements(int a, int b, void *context)
 		/* One list distance for every primitive pair of the two elements, from their largest
 		 * radii and guards: a little generous, and no lookups per primitive pair. */
 		float scale = self ? ma->self_width_scale : 1.0f;
+		/* How far their motions may bring them closer (plait_mesh_contacts_gather). */
+		float relative = mc->element_spread[a] + mc->element_spread[b] +
+		                 v3_length(v3_sub(mc->element_motion[a], mc->element_motion[b]));
+		pass->pair_slack = (float)LIST_SUBSTEPS * relative + mc->element_guard[a] + mc->element_guard[b];
 		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
-		                      mc->element_guard[a] + mc->element_guard[b] + 2.0f * FAILSAFE_DISTANCE;
-		pass->pair_slack = mc->element_guard[a] + mc->element_guard[b];
-		if (!self) {
-			float allowance =
-			    mc->allowance[mc->object_of[ea->v[0]] * mc->object_count + mc->object_of[eb->v[0]]];
-			pass->list_distance += allowance;
-			pass->pair_slack += allowance;
-		}
+		                      pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
 	}
 	walk_element_pair(pass, a, b, ma, mb, self);
 	if (pass->stage == STAGE_REST && pass->all_rest && !pass->failed) {
