@@ -214,3 +214,39 @@ void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3
 	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, self, margin, piece[0], piece[1],
 	               visit, context, 0, NULL, 0);
 }
+
+static bool boxes_within(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
+{
+	return la.x - ub.x <= margin && lb.x - ua.x <= margin && la.y - ub.y <= margin && lb.y - ua.y <= margin &&
+	       la.z - ub.z <= margin && lb.z - ua.z <= margin;
+}
+
+void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                              vec3 box_lower, vec3 box_upper, float margin, plait_element_visitor *visit,
+                              void *context)
+{
+	if (tree->node_count == 0) {
+		return;
+	}
+	/* The depth of a tree of median splits over at most 2^31 elements stays well under this. */
+	int stack[128];
+	int top = 0;
+	stack[top++] = 0;
+	while (top > 0) {
+		const plait_tree_node *n = &tree->nodes[stack[--top]];
+		if (!boxes_within(n->lower, n->upper, box_lower, box_upper, margin)) {
+			continue;
+		}
+		if (n->count > 0) {
+			for (int k = n->first; k < n->first + n->count; ++k) {
+				int e = tree->order[k];
+				if (boxes_within(lower[e], upper[e], box_lower, box_upper, margin)) {
+					visit(e, context);
+				}
+			}
+			continue;
+		}
+		stack[top++] = n->first + 1; /* right, popped after the left */
+		stack[top++] = n->first;
+	}
+}

@@ -48,6 +48,13 @@ void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const ve
                                       const vec3 *lower_b, const vec3 *upper_b, float margin,
                                       plait_element_pair_visitor *visit, void *context);
 
+/* Calls visit(e, context) for every element e whose box comes within `margin` of the box
+ * [box_lower, box_upper], in the tree's order. Uses the boxes given to the last refit. */
+typedef void plait_element_visitor(int element, void *context);
+void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                              vec3 box_lower, vec3 box_upper, float margin, plait_element_visitor *visit,
+                              void *context);
+
 /* The same traversals cut into pieces for workers: writes the node pairs (a, b) reached after
  * `depth` splits (and the leaf pairs reached before), in the order the traversal meets them,
  * and returns how many; -1 when more than capacity. The pairs of all pieces, each traversed by

@@ -59,6 +59,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->members);
 	plait_free(a, mc->x_gather);
 	plait_free(a, mc->motion);
+	plait_free(a, mc->around);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	plait_mesh_contacts_free_pieces(mc, a);

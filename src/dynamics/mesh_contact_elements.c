@@ -15,6 +15,8 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	mc->element_motion = NULL;
 	plait_free(a, mc->element_spread);
 	mc->element_spread = NULL;
+	plait_free(a, mc->element_around);
+	mc->element_around = NULL;
 	plait_free(a, mc->shapes);
 	mc->shapes = NULL;
 	plait_free(a, mc->lower);
@@ -105,6 +107,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->element_guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->element_spread = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->element_around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
 	mc->shapes = plait_alloc_zero(a, (size_t)count, sizeof *mc->shapes);
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
@@ -117,8 +120,9 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	bool active = false;
 	int edge_count = 0;
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
-	          mc->element_motion != NULL && mc->element_spread != NULL && mc->shapes != NULL &&
-	          mc->lower != NULL && mc->upper != NULL && edges != NULL && owned != NULL && mc->objects != NULL;
+	          mc->element_motion != NULL && mc->element_spread != NULL && mc->element_around != NULL &&
+	          mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL && edges != NULL &&
+	          owned != NULL && mc->objects != NULL;
 	if (ok) {
 		int e = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {
@@ -247,6 +251,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->motion);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
+	plait_free(a, mc->around);
+	mc->around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
 	mc->x_gather = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
@@ -256,7 +262,7 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->touched = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->members = plait_alloc_zero(a, (size_t)count, sizeof *mc->members);
 	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
-	    mc->motion == NULL || mc->guard == NULL || mc->object_of == NULL) {
+	    mc->motion == NULL || mc->guard == NULL || mc->object_of == NULL || mc->around == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

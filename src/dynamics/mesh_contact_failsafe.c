@@ -315,9 +315,68 @@ static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass 
 	return true;
 }
 
-/* Sweeps every pair from the start of the substep to now; returns the crossing pairs found
- * and leaves them merged into zones. */
-static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list)
+/* ---- Sweeps around some vertices ------------------------------------------------------------ */
+
+/* The element pairs of one element flagged in mc->element_around with the elements of one
+ * object: a pair of two flagged elements is met from both, and swept from the lower. */
+typedef struct around_query {
+	pair_pass *pass;
+	int element; /* global */
+	int first;   /* the queried object's first element */
+} around_query;
+
+static void visit_around(int local, void *context)
+{
+	const around_query *query = context;
+	int e = query->element, f = query->first + local;
+	if (f == e || (query->pass->mc->element_around[f] && f < e)) {
+		return;
+	}
+	object_pass pass = {query->pass, 0, 0};
+	plait_mesh_contacts_visit_object_elements(e < f ? e : f, e < f ? f : e, &pass);
+}
+
+/* Sweeps every primitive pair with a vertex flagged in mc->around, from the substep's start to
+ * now: each element with such a vertex, its box around its paths queried against the trees of
+ * the objects it meets, in element order (on the calling thread: the vertices are few). */
+static void sweep_around(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	plait_mesh_contacts_fit_boxes(sim, mc, true, pass->failsafe_distance);
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		uint8_t any = 0;
+		for (int k = 0; k < el->size; ++k) {
+			any |= mc->around[el->v[k]];
+		}
+		mc->element_around[e] = any;
+	}
+	for (int a = 0; a < mc->object_count; ++a) {
+		const collision_object *oa = &mc->objects[a];
+		for (int e = oa->first; e < oa->first + oa->count; ++e) {
+			if (!mc->element_around[e]) {
+				continue;
+			}
+			for (int b = 0; b < mc->object_count; ++b) {
+				bool meet = b == a ? oa->self
+				                   : plait_mesh_contacts_objects_meet(sim, mc, a < b ? a : b, a < b ? b : a);
+				if (!meet) {
+					continue;
+				}
+				const collision_object *ob = &mc->objects[b];
+				around_query query = {pass, e, ob->first};
+				plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first,
+				                         mc->lower[e], mc->upper[e], 0.0f, visit_around, &query);
+			}
+		}
+	}
+}
+
+/* Sweeps from the start of the substep to now: every pair (from_list: the listed pairs, which
+ * are every pair that can cross while the list covers), or with `around` only the listed pairs
+ * and those with a vertex flagged in mc->around; returns the crossing pairs found and leaves
+ * them merged into zones. */
+static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distance, bool from_list,
+                          bool around)
 {
 	pair_pass pass = {.sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = distance};
 	sweep_rest_pairs(&pass);
@@ -325,6 +384,11 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, true))) {
 			sweep_listed(mc, &pass, 0, mc->pair_count);
 		}
+	}
+	if (around) {
+		sweep_around(sim, mc, &pass);
+	}
+	if (from_list || around) {
 		return pass.hits;
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, true, distance);
@@ -338,6 +402,9 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 
 #define ZONE_ROUNDS 12
 #define FREEZE_ROUNDS 12
+/* The failsafe sweeps around strayed vertices when at most one in this many strayed, and
+ * traverses (or lists again) otherwise. */
+#define STRAY_SHARE 8
 
 void plait_mesh_contacts_failsafe(plait_sim *sim)
 {
@@ -352,13 +419,37 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 	 * costs about the same, covers the substep from its start (the guards hold the motion so
 	 * far), and often serves the next substep too. Layers lying on each other list far more
 	 * pairs than their paths meet, and keep the traversal. */
-	bool covers = plait_mesh_contacts_list_covers(sim, mc, true);
-	if (!covers && mc->pair_count <= mc->traversal_sweeps) {
+	/* A list that holds but for a few vertices that strayed from their paths (pushed by
+	 * contacts) is swept with the pairs around those vertices. */
+	int strays = 0;
+	bool holds = plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays);
+	bool covers = holds && strays == 0;
+	bool around_strays = holds && strays > 0 && strays <= p->count / STRAY_SHARE;
+	if (holds && !around_strays) {
+		memset(mc->around, 0, (size_t)p->count);
+	}
+	if (!covers && !around_strays && mc->pair_count <= mc->traversal_sweeps) {
 		plait_mesh_contacts_gather(sim, mc);
 		covers = mc->list_valid;
 	}
 	for (int round = 0; round < ZONE_ROUNDS + FREEZE_ROUNDS; ++round) {
-		int hits = find_crossings(sim, mc, distance, round == 0 && covers);
+		int hits;
+		if (round == 0) {
+			hits = find_crossings(sim, mc, distance, covers || around_strays, around_strays);
+			if (around_strays) {
+				memset(mc->around, 0, (size_t)p->count);
+			}
+		} else {
+			/* Only the zones' vertices moved since the last round, which found every other
+			 * pair clear: the pairs around them are swept again. */
+			for (int k = 0; k < mc->touched_count; ++k) {
+				mc->around[mc->touched[k]] = 1;
+			}
+			hits = find_crossings(sim, mc, distance, false, true);
+			for (int k = 0; k < mc->touched_count; ++k) {
+				mc->around[mc->touched[k]] = 0;
+			}
+		}
 		if (hits == 0) {
 			break;
 		}

@@ -171,6 +171,10 @@ typedef struct plait_mesh_contacts {
 	int *zone_parent;
 	int *touched;
 	int touched_count;
+	/* Failsafe scratch: per particle, swept around (0 or 1; all 0 between sweeps); per element,
+	 * whether it has such a vertex. */
+	uint8_t *around;
+	uint8_t *element_around;
 	int (*members)[2]; /* (root, particle), sorted to walk zone by zone */
 } plait_mesh_contacts;
 
@@ -307,6 +311,12 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc);
 /* Whether the list still holds every pair that can touch or cross (now, and with with_start at
  * the substep's start). */
 bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start);
+/* Whether the list holds every pair of two vertices that kept within their guards over the
+ * substep, with the others flagged in strayed[] (per particle; set to 1, never cleared here)
+ * and counted into *stray_count. False (nothing flagged) when it holds no pair at all: out of
+ * its substeps, or a filtered collider's bound outgrown. */
+bool plait_mesh_contacts_list_covers_except(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
+                                            int *stray_count);
 
 /* mesh_contact_pieces.c */
 

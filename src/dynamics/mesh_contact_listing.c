@@ -222,8 +222,11 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 /* Whether the list still holds every pair that can touch or cross: within LIST_SUBSTEPS
  * substeps of the gather's, every vertex within its guard of its path (see
  * plait_mesh_contacts_gather) at the substep's start (with `with_start`) and now. A substep's
- * paths run straight between those, so they keep as near the vertices' paths. */
-bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start)
+ * paths run straight between those, so they keep as near the vertices' paths. With `strayed`
+ * (one flag per particle), the vertices out of their guards are flagged and counted into
+ * *stray_count instead: the list then holds every pair of two vertices that are not. */
+static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start, uint8_t *strayed,
+                       int *stray_count)
 {
 	if (!mc->list_valid) {
 		return false;
@@ -236,21 +239,42 @@ bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *
 		return false; /* D of the colliders' corners and edges left out no longer holds */
 	}
 	const plait_particles *p = &sim->particles;
-	for (int when = with_start ? 0 : 1; when < 2; ++when) {
-		/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
-		float along = (float)(since - 1 + when);
-		for (int i = 0; i < p->count; ++i) {
-			if (mc->object_of[i] < 0) {
-				continue;
-			}
+	int strays = 0;
+	for (int i = 0; i < p->count; ++i) {
+		if (mc->object_of[i] < 0) {
+			continue;
+		}
+		bool out = false;
+		for (int when = with_start ? 0 : 1; when < 2 && !out; ++when) {
+			/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
+			float along = (float)(since - 1 + when);
 			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
 			vec3 stray = v3_sub(x, v3_mul_add(mc->x_gather[i], along, mc->motion[i]));
-			if (v3_length_sq(stray) > mc->guard[i] * mc->guard[i]) {
+			out = v3_length_sq(stray) > mc->guard[i] * mc->guard[i];
+		}
+		if (out) {
+			if (strayed == NULL) {
 				return false;
 			}
+			strayed[i] = 1;
+			strays += 1;
 		}
 	}
+	if (stray_count != NULL) {
+		*stray_count = strays;
+	}
 	return true;
+}
+
+bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start)
+{
+	return list_holds(sim, mc, with_start, NULL, NULL);
+}
+
+bool plait_mesh_contacts_list_covers_except(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
+                                            int *stray_count)
+{
+	return list_holds(sim, mc, true, strayed, stray_count);
 }
 
 long plait_mesh_contacts_listings(const plait_sim *sim)
