@@ -3,6 +3,8 @@
 #include "collision/closest.h"
 #include "dynamics/mesh_contact_internal.h"
 
+#include <string.h>
+
 bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 {
 	*active = false;
@@ -250,8 +252,17 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		return 0;
 	}
 	if (!mc->gathered) {
-		if (!plait_mesh_contacts_list_covers(sim, mc, true)) {
+		/* A list that holds but for a few vertices pushed off their paths is mended around
+		 * them; otherwise it is gathered again. */
+		int strays = 0, count = sim->particles.count;
+		bool holds = plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays);
+		if (holds && strays > 0 && strays <= count / STRAY_SHARE) {
+			plait_mesh_contacts_relist_around(sim, mc);
+		} else if (!holds || strays > 0) {
 			plait_mesh_contacts_gather(sim, mc);
+		}
+		if (strays > 0) {
+			memset(mc->around, 0, (size_t)count);
 		}
 		mc->gathered = true;
 	}

@@ -317,58 +317,15 @@ static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass 
 
 /* ---- Sweeps around some vertices ------------------------------------------------------------ */
 
-/* The element pairs of one element flagged in mc->element_around with the elements of one
- * object: a pair of two flagged elements is met from both, and swept from the lower. */
-typedef struct around_query {
-	pair_pass *pass;
-	int element; /* global */
-	int first;   /* the queried object's first element */
-} around_query;
-
-static void visit_around(int local, void *context)
-{
-	const around_query *query = context;
-	int e = query->element, f = query->first + local;
-	if (f == e || (query->pass->mc->element_around[f] && f < e)) {
-		return;
-	}
-	object_pass pass = {query->pass, 0, 0};
-	plait_mesh_contacts_visit_object_elements(e < f ? e : f, e < f ? f : e, &pass);
-}
-
 /* Sweeps every primitive pair with a vertex flagged in mc->around, from the substep's start to
  * now: each element with such a vertex, its box around its paths queried against the trees of
  * the objects it meets, in element order (on the calling thread: the vertices are few). */
 static void sweep_around(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
 {
 	plait_mesh_contacts_fit_boxes(sim, mc, true, pass->failsafe_distance);
-	for (int e = 0; e < mc->element_count; ++e) {
-		const element *el = &mc->elements[e];
-		uint8_t any = 0;
-		for (int k = 0; k < el->size; ++k) {
-			any |= mc->around[el->v[k]];
-		}
-		mc->element_around[e] = any;
-	}
-	for (int a = 0; a < mc->object_count; ++a) {
-		const collision_object *oa = &mc->objects[a];
-		for (int e = oa->first; e < oa->first + oa->count; ++e) {
-			if (!mc->element_around[e]) {
-				continue;
-			}
-			for (int b = 0; b < mc->object_count; ++b) {
-				bool meet = b == a ? oa->self
-				                   : plait_mesh_contacts_objects_meet(sim, mc, a < b ? a : b, a < b ? b : a);
-				if (!meet) {
-					continue;
-				}
-				const collision_object *ob = &mc->objects[b];
-				around_query query = {pass, e, ob->first};
-				plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first,
-				                         mc->lower[e], mc->upper[e], 0.0f, visit_around, &query);
-			}
-		}
-	}
+	plait_mesh_contacts_mark_elements(mc);
+	object_pass objects = {pass, 0, 0};
+	plait_mesh_contacts_query_around(sim, mc, false, plait_mesh_contacts_visit_object_elements, &objects);
 }
 
 /* Sweeps from the start of the substep to now: every pair (from_list: the listed pairs, which
@@ -402,9 +359,6 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 
 #define ZONE_ROUNDS 12
 #define FREEZE_ROUNDS 12
-/* The failsafe sweeps around strayed vertices when at most one in this many strayed, and
- * traverses (or lists again) otherwise. */
-#define STRAY_SHARE 8
 
 void plait_mesh_contacts_failsafe(plait_sim *sim)
 {

@@ -161,6 +161,7 @@ typedef struct plait_mesh_contacts {
 	float *guard; /* per particle: how far it may stray from that path */
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
 	long listings;                      /* gathers since the stage was made */
+	long relistings;                    /* lists mended around strayed vertices since then */
 	int *object_of;                     /* per particle: its collision object, or -1 */
 	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
 	int *object_counts;                 /* per collision object: scratch of object_shifts */
@@ -188,6 +189,10 @@ typedef struct plait_mesh_contacts {
 /* A list serves the substep of its gather and this many after it. */
 #define LIST_SUBSTEPS 1
 
+/* A list whose vertices strayed from their paths, at most one in this many, is mended around
+ * them (the failsafe sweeps around them); otherwise it is gathered again (or traversed). */
+#define STRAY_SHARE 8
+
 /* The rounding allowance of the cheap distance bounds (mesh_contact_geometry.c) and of the
  * element pair walk's rejections (mesh_contact_pairs.c), scene units. */
 #define REJECT_SLACK 1e-5f
@@ -208,7 +213,10 @@ typedef struct pair_pass {
 	float failsafe_distance;
 	int hits;
 	float list_distance; /* STAGE_GATHER: of the element pair being visited */
-	float pair_slack;    /* STAGE_GATHER: how far its primitives may come closer (guards, allowance) */
+	/* STAGE_GATHER when re-listing around strayed vertices (plait_mesh_contacts_relist_around):
+	 * only primitive pairs with a vertex flagged in mc->around, with twice the guards. */
+	bool around_only;
+	float pair_slack; /* STAGE_GATHER: how far its primitives may come closer (guards, allowance) */
 	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
 	 * (or shares a vertex); the element pairs that are, for the exclusion lists. */
 	bool all_rest;
@@ -308,6 +316,17 @@ float plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pa
 void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pass);
 /* Lists the pairs that may touch into mc->pairs, with new guards and allowances. */
 void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc);
+/* Mends a list that holds but for the vertices flagged in mc->around (see
+ * plait_mesh_contacts_list_covers_except): they take new paths, and their pairs are listed
+ * again. */
+void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc);
+/* mc->element_around from mc->around: the elements with a flagged vertex. */
+void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
+/* Each element pair with a flagged element (mc->element_around) whose boxes overlap (between
+ * objects within their allowance, with_allowance), once, handed to visit in global element
+ * numbers: each flagged element's box queried against the trees of the objects it meets. */
+void plait_mesh_contacts_query_around(const plait_sim *sim, const plait_mesh_contacts *mc,
+                                      bool with_allowance, plait_element_pair_visitor *visit, void *context);
 /* Whether the list still holds every pair that can touch or cross (now, and with with_start at
  * the substep's start). */
 bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start);

@@ -10,7 +10,16 @@
  * element's reach, its largest guard and how far its motion may take it from its object's
  * (a pair within its list distance has overlapping boxes, see plait_mesh_contacts_gather).
  * For the failsafe: around the paths of the substep, grown by `margin`. */
+static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin, bool measure_edges);
+
 void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin)
+{
+	fit_boxes(sim, mc, paths, margin, true);
+}
+
+/* As plait_mesh_contacts_fit_boxes; without measure_edges the cloth edges' bounds of the last
+ * listing are kept (a re-listing around strayed vertices must decide as the listing did). */
+static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin, bool measure_edges)
 {
 	const plait_particles *p = &sim->particles;
 	for (int e = 0; e < mc->element_count; ++e) {
@@ -59,15 +68,16 @@ void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool
 			}
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
-			/* Swept along its vertices' paths relative to their object, from the substep's start
-			 * to LIST_SUBSTEPS substeps on. */
+			/* Swept along its vertices' paths relative to their object, from the gather's
+			 * substep's start to LIST_SUBSTEPS substeps on (its paths as the gather took them,
+			 * at a gather where it is now). */
 			int o = mc->object_of[el->v[0]];
 			vec3 mean = o >= 0 ? mc->shift[o] : v3(0.0f, 0.0f, 0.0f); /* minus the object's */
 			for (int k = 0; k < el->size; ++k) {
-				vec3 x = p->point[el->v[k]].x, w = v3_add(mc->motion[el->v[k]], mean);
+				vec3 x = mc->x_gather[el->v[k]], w = v3_add(mc->motion[el->v[k]], mean);
 				vec3 back = v3_sub(x, w), on = v3_mul_add(x, (float)LIST_SUBSTEPS, w);
-				lower = v3_min(lower, v3_min(back, on));
-				upper = v3_max(upper, v3_max(back, on));
+				lower = v3_min(lower, v3_min(x, v3_min(back, on)));
+				upper = v3_max(upper, v3_max(x, v3_max(back, on)));
 			}
 			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
 			mc->element_reach[e] = radius;
@@ -76,7 +86,7 @@ void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool
 		mc->lower[e] = v3_sub(lower, v3(g, g, g));
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
 	}
-	if (mc->features != NULL) {
+	if (mc->features != NULL && measure_edges) {
 		plait_mesh_contacts_measure_cloth_edges(sim, mc, paths ? 1.0f : CLOTH_EDGE_SLACK);
 	}
 	for (int k = 0; k < mc->object_count; ++k) {
@@ -174,6 +184,21 @@ static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const v
  * its vertices' motions); the element pair walk lists the pairs nearer than their contact
  * distance plus that. Neighbours that move together (a cloth falling or swinging as a whole)
  * then list only what is really close, and keep their list while they move steadily. */
+/* Gravity's bend of a path over the substeps a list serves. */
+static float path_bend(const plait_sim *sim)
+{
+	float h = sim->substep_time, steps = (float)LIST_SUBSTEPS;
+	return v3_length(sim->settings.gravity) * h * h * 0.5f * steps * (steps + 1.0f);
+}
+
+/* Particle i's guard, from its motion (mc->motion) and its object's mean (mc->shift). */
+static float path_guard(const plait_sim *sim, const plait_mesh_contacts *mc, int i, float bend)
+{
+	int o = mc->object_of[i];
+	float relative = o >= 0 ? v3_length(v3_add(mc->motion[i], mc->shift[o])) : v3_length(mc->motion[i]);
+	return 0.25f * relative + bend + 0.1f * sim->particles.radius[i] + 1e-4f;
+}
+
 void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	mc->pair_count = 0;
@@ -186,19 +211,16 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 		mc->motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
 	}
 	object_shifts(sim, mc, p->x_prev, true); /* minus each object's mean motion */
-	float h = sim->substep_time, steps = (float)LIST_SUBSTEPS;
-	float bend = v3_length(sim->settings.gravity) * h * h * 0.5f * steps * (steps + 1.0f);
+	float bend = path_bend(sim);
 	for (int i = 0; i < p->count; ++i) {
-		int o = mc->object_of[i];
-		float relative = o >= 0 ? v3_length(v3_add(mc->motion[i], mc->shift[o])) : v3_length(mc->motion[i]);
-		mc->guard[i] = 0.25f * relative + bend + 0.1f * p->radius[i] + 1e-4f;
+		mc->guard[i] = path_guard(sim, mc, i, bend);
 	}
 	/* Boxes reach across by their elements' motions relative to their objects' (fit_boxes) and
 	 * the objects' relative motion (here). */
 	mc->allowance_max = 0.0f;
 	for (int a = 0; a < mc->object_count; ++a) {
 		for (int b = 0; b < mc->object_count; ++b) {
-			float allow = steps * v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
+			float allow = (float)LIST_SUBSTEPS * v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
 			mc->allowance[a * mc->object_count + b] = allow;
 			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
 		}
@@ -275,6 +297,109 @@ bool plait_mesh_contacts_list_covers_except(const plait_sim *sim, plait_mesh_con
                                             int *stray_count)
 {
 	return list_holds(sim, mc, true, strayed, stray_count);
+}
+
+void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc)
+{
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		uint8_t any = 0;
+		for (int k = 0; k < el->size; ++k) {
+			any |= mc->around[el->v[k]];
+		}
+		mc->element_around[e] = any;
+	}
+}
+
+/* An element pair met by a query around a flagged element: visited once, from the lower when
+ * both are flagged, in element order (the objects' order). */
+typedef struct around_query {
+	void *context;
+	const plait_mesh_contacts *mc;
+	int element; /* global */
+	int first;   /* the queried object's first element */
+	plait_element_pair_visitor *visit;
+} around_query;
+
+static void visit_around(int local, void *context)
+{
+	const around_query *query = context;
+	int e = query->element, f = query->first + local;
+	if (f == e || (query->mc->element_around[f] && f < e)) {
+		return;
+	}
+	query->visit(e < f ? e : f, e < f ? f : e, query->context);
+}
+
+void plait_mesh_contacts_query_around(const plait_sim *sim, const plait_mesh_contacts *mc,
+                                      bool with_allowance, plait_element_pair_visitor *visit, void *context)
+{
+	for (int a = 0; a < mc->object_count; ++a) {
+		const collision_object *oa = &mc->objects[a];
+		for (int e = oa->first; e < oa->first + oa->count; ++e) {
+			if (!mc->element_around[e]) {
+				continue;
+			}
+			for (int b = 0; b < mc->object_count; ++b) {
+				bool meet = b == a ? oa->self
+				                   : plait_mesh_contacts_objects_meet(sim, mc, a < b ? a : b, a < b ? b : a);
+				if (!meet) {
+					continue;
+				}
+				const collision_object *ob = &mc->objects[b];
+				float margin = with_allowance && b != a ? mc->allowance[a * mc->object_count + b] : 0.0f;
+				around_query query = {context, mc, e, ob->first, visit};
+				plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first,
+				                         mc->lower[e], mc->upper[e], margin, visit_around, &query);
+			}
+		}
+	}
+}
+
+/* The strayed vertices take the paths they are on now (their motion over this substep so
+ * far, continued), written back to the gather's substep so that every vertex's path keeps one
+ * form (list_holds), with new guards. The pairs with one of them leave the list, and the
+ * elements with one are queried against the trees: their boxes from their new paths, the
+ * others' from the gather's (their paths), and each primitive pair with a strayed vertex is
+ * listed as at a gather (with twice the guards: the others may be a guard off their paths
+ * already). A pair of two vertices that kept to their paths is as the gather left it. */
+void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_particles *p = &sim->particles;
+	float since = (float)(mc->substep_serial - mc->gather_serial), bend = path_bend(sim);
+	for (int i = 0; i < p->count; ++i) {
+		if (mc->around[i]) {
+			mc->motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
+			mc->x_gather[i] = v3_mul_add(p->point[i].x, -since, mc->motion[i]);
+			mc->guard[i] = path_guard(sim, mc, i, bend);
+		}
+	}
+	int kept = 0;
+	for (int k = 0; k < mc->pair_count; ++k) {
+		const contact_pair *pair = &mc->pairs[k];
+		uint8_t any = 0;
+		for (int m = 0; m < pair_size[pair->type]; ++m) {
+			any |= mc->around[pair->v[m]];
+		}
+		if (!any) {
+			mc->pairs[kept++] = *pair;
+		}
+	}
+	mc->pair_count = kept;
+	mc->relistings += 1;
+	mc->out_of_memory = false;
+	fit_boxes(sim, mc, false, 0.0f, false);
+	plait_mesh_contacts_mark_elements(mc);
+	pair_pass pass = {.sim = sim,
+	                  .mc = mc,
+	                  .stage = STAGE_GATHER,
+	                  .around_only = true,
+	                  .out_pairs = &mc->pairs,
+	                  .out_count = &mc->pair_count,
+	                  .out_capacity = &mc->pair_capacity};
+	object_pass objects = {&pass, 0, 0};
+	plait_mesh_contacts_query_around(sim, mc, true, plait_mesh_contacts_visit_object_elements, &objects);
+	mc->list_valid = !mc->out_of_memory;
 }
 
 long plait_mesh_contacts_listings(const plait_sim *sim)

@@ -124,6 +124,15 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	if (shares_vertex(v, n)) {
 		return;
 	}
+	if (pass->around_only) {
+		uint8_t any = 0;
+		for (int k = 0; k < n; ++k) {
+			any |= pass->mc->around[v[k]];
+		}
+		if (!any) {
+			return; /* listed or left out at the gather, and still so */
+		}
+	}
 	if (pass->stage == STAGE_FAILSAFE) {
 		plait_mesh_contacts_sweep_pair(pass, type, v);
 		return;
@@ -417,7 +426,10 @@ static void visit_elements(int a, int b, void *context)
 		/* How far their motions may bring them closer (plait_mesh_contacts_gather). */
 		float relative = mc->element_spread[a] + mc->element_spread[b] +
 		                 v3_length(v3_sub(mc->element_motion[a], mc->element_motion[b]));
-		pass->pair_slack = (float)LIST_SUBSTEPS * relative + mc->element_guard[a] + mc->element_guard[b];
+		/* Re-listing around strayed vertices measures from now, when the others may already
+		 * be a guard off their paths. */
+		float guards = (pass->around_only ? 2.0f : 1.0f) * (mc->element_guard[a] + mc->element_guard[b]);
+		pass->pair_slack = (float)LIST_SUBSTEPS * relative + guards;
 		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
 		                      pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
 	}
