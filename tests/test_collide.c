@@ -11,6 +11,7 @@
 #include "collide_scenes.h"
 #include "test_support.h"
 #include "dynamics/mesh_contact.h"
+#include "dynamics/mesh_contact_internal.h"
 #include "world/world.h"
 
 typedef struct scene_totals {
@@ -538,6 +539,80 @@ Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
 	cr_expect_lt(target_centre.y, -0.05f, "the target was not pushed (centre at %g)",
 	             (double)target_centre.y);
 	plait_destroy_world(world);
+}
+
+/* The filter of a sphere mesh's smooth corners and edges decides with a bound on each cloth
+ * triangle's edges (mesh_contact_features.c). A list holds while no edge outgrows its bound;
+ * when one does, its triangle's vertices and those of the triangles across its edges (whose D
+ * reads that bound) count as strayed, and mending the list sets the bound from the edge now. */
+Test(collide, a_cloth_edge_outgrowing_its_bound_is_mended_around)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	sphere_mesh ball = make_sphere_mesh(48);
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_MESH;
+	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
+	sphere.surface.thickness = 0.0f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
+	test_grid grid = test_grid_make(24, 24, 0.6f, 0.6f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].y = 0.7f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.01f;
+	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, NULL)));
+	test_grid_free(&grid);
+	cr_assert(test_step_frames(world, 1));
+	plait_sim *sim = &world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	cr_assert(mc != NULL && mc->features != NULL, "the sphere mesh is not filtered");
+	/* A cloth triangle in the middle of the sheet, with three neighbours. */
+	int e = -1;
+	for (int k = 0; k < mc->element_count && e < 0; ++k) {
+		bool inner = mc->elements[k].size == 3 && mc->cloth_bound[k] > 0.0f;
+		for (int q = 0; q < 3 && inner; ++q) {
+			inner = mc->neighbours[k][q] >= 0;
+		}
+		e = inner && k > mc->element_count / 2 ? k : -1;
+	}
+	cr_assert(e >= 0);
+	/* The list as just gathered, then one corner of the triangle pulled out of its bound. */
+	plait_mesh_contacts_gather(sim, mc);
+	int corner = mc->elements[e].v[0];
+	float bound = mc->cloth_bound[e];
+	sim->particles.point[corner].x.x += 2.0f * bound;
+	sim->particles.x_prev[corner].x += 2.0f * bound;
+	mc->motion[corner] = v3(0.0f, 0.0f, 0.0f);
+	mc->x_gather[corner] = sim->particles.point[corner].x; /* on its path: only the bound fails */
+	cr_assert(!plait_mesh_contacts_list_covers(sim, mc, true));
+	memset(mc->around, 0, (size_t)sim->particles.count);
+	int strays = 0;
+	cr_assert(plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays));
+	for (int q = -1; q < 3; ++q) {
+		const int *v = mc->elements[q < 0 ? e : mc->neighbours[e][q]].v;
+		for (int m = 0; m < 3; ++m) {
+			cr_expect_eq(mc->around[v[m]], 1, "vertex %d of %s not flagged", v[m],
+			             q < 0 ? "the triangle" : "a neighbour");
+		}
+	}
+	cr_expect_geq(strays, 5);
+	plait_mesh_contacts_relist_around(sim, mc);
+	memset(mc->around, 0, (size_t)sim->particles.count);
+	cr_expect_gt(mc->cloth_bound[e], 2.0f * bound, "the outgrown bound was not set again");
+	for (int q = 0; q < 3; ++q) {
+		cr_expect_geq(mc->pair_reach[mc->neighbours[e][q]], mc->cloth_bound[e],
+		              "a neighbour's D does not read the new bound");
+	}
+	strays = 0;
+	cr_expect(plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays));
+	cr_expect_eq(strays, 0, "%d vertices still strayed after mending", strays);
+	plait_destroy_world(world);
+	free(ball.x);
+	free(ball.sizes);
+	free(ball.indices);
 }
 
 /* Two weightless sheets closing at 20 m/s (0.11 m a substep, against 2 cm of contact distance):

@@ -263,6 +263,60 @@ bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const p
 	return true;
 }
 
+int plait_mesh_contacts_mark_outgrown(const plait_sim *sim, const plait_mesh_contacts *mc, uint8_t *marked)
+{
+	const plait_particles *p = &sim->particles;
+	int newly = 0;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			if (longest_edge_sq(p, &mc->elements[e]) <= mc->cloth_bound[e] * mc->cloth_bound[e]) {
+				continue;
+			}
+			for (int q = -1; q < 3; ++q) {
+				int n = q < 0 ? e : mc->neighbours[e][q];
+				if (n < 0) {
+					continue;
+				}
+				const element *el = &mc->elements[n];
+				for (int m = 0; m < el->size; ++m) {
+					newly += !marked[el->v[m]];
+					marked[el->v[m]] = 1;
+				}
+			}
+		}
+	}
+	return newly;
+}
+
+void plait_mesh_contacts_rebound_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (!meets_collider_surfaces(sim, mc, o)) {
+			continue;
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			float longest = sqrtf(longest_edge_sq(p, &mc->elements[e]));
+			if (longest > mc->cloth_bound[e]) {
+				mc->cloth_bound[e] = CLOTH_EDGE_SLACK * longest;
+			}
+		}
+		for (int e = o->first; e < o->first + o->count; ++e) {
+			float reach = mc->cloth_bound[e];
+			for (int q = 0; q < 3; ++q) {
+				int n = mc->neighbours[e][q];
+				reach = n >= 0 ? plait_maxf(reach, mc->cloth_bound[n]) : reach;
+			}
+			mc->pair_reach[e] = reach;
+		}
+	}
+}
+
 /* Which corners and edges of a filtered collider's element c meet cloth element e here: bits of
  * its own vertices and edges whose smooth reach the cloth's D (pair_reach) does not stay under. */
 void plait_mesh_contacts_live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices,

@@ -299,6 +299,14 @@ bool plait_mesh_contacts_build_collider_features(plait_sim *sim, plait_mesh_cont
 void plait_mesh_contacts_measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, float slack);
 /* Whether every cloth edge that meets filtered colliders is still within its bound. */
 bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_contacts *mc);
+/* Flags (marked[], per particle) the vertices of each cloth element whose edge outgrew its
+ * bound and of the elements across its edges (whose D reads its bound); returns how many were
+ * not flagged yet. */
+int plait_mesh_contacts_mark_outgrown(const plait_sim *sim, const plait_mesh_contacts *mc, uint8_t *marked);
+/* For a list mended around those vertices: the outgrown bounds set again from the edges now
+ * (with slack), the others kept, and every D (pair_reach) taken from the bounds, as at the
+ * listing (a failsafe's traversal since may have measured them without slack). */
+void plait_mesh_contacts_rebound_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc);
 /* The corners and edges of filtered collider element c that meet cloth element e (bits). */
 void plait_mesh_contacts_live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices,
                                        uint8_t *edges);

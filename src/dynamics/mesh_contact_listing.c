@@ -257,11 +257,16 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, bool with_
 	if (since < 0 || since > LIST_SUBSTEPS) {
 		return false;
 	}
-	if (mc->features != NULL && !plait_mesh_contacts_cloth_edges_within_bounds(sim, mc)) {
-		return false; /* D of the colliders' corners and edges left out no longer holds */
-	}
 	const plait_particles *p = &sim->particles;
 	int strays = 0;
+	if (mc->features != NULL && !plait_mesh_contacts_cloth_edges_within_bounds(sim, mc)) {
+		/* D of the colliders' corners and edges left out no longer holds for some elements:
+		 * their vertices (and their neighbours', whose D reads their bound) strayed too. */
+		if (strayed == NULL) {
+			return false;
+		}
+		strays += plait_mesh_contacts_mark_outgrown(sim, mc, strayed);
+	}
 	for (int i = 0; i < p->count; ++i) {
 		if (mc->object_of[i] < 0) {
 			continue;
@@ -278,8 +283,8 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, bool with_
 			if (strayed == NULL) {
 				return false;
 			}
+			strays += !strayed[i];
 			strayed[i] = 1;
-			strays += 1;
 		}
 	}
 	if (stray_count != NULL) {
@@ -389,6 +394,9 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->relistings += 1;
 	mc->out_of_memory = false;
 	fit_boxes(sim, mc, false, 0.0f, false);
+	if (mc->features != NULL) {
+		plait_mesh_contacts_rebound_cloth_edges(sim, mc);
+	}
 	plait_mesh_contacts_mark_elements(mc);
 	pair_pass pass = {.sim = sim,
 	                  .mc = mc,
