@@ -256,7 +256,7 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		 * them; otherwise it is gathered again. */
 		int strays = 0, count = sim->particles.count;
 		bool holds = plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays);
-		if (holds && strays > 0 && strays <= count / STRAY_SHARE) {
+		if (holds && plait_mesh_contacts_few_strays(strays, count)) {
 			plait_mesh_contacts_relist_around(sim, mc);
 		} else if (!holds || strays > 0) {
 			plait_mesh_contacts_gather(sim, mc);

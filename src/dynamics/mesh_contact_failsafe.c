@@ -378,7 +378,7 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 	int strays = 0;
 	bool holds = plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays);
 	bool covers = holds && strays == 0;
-	bool around_strays = holds && strays > 0 && strays <= p->count / STRAY_SHARE;
+	bool around_strays = holds && plait_mesh_contacts_few_strays(strays, p->count);
 	if (holds && !around_strays) {
 		memset(mc->around, 0, (size_t)p->count);
 	}

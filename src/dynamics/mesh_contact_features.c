@@ -204,6 +204,23 @@ bool plait_mesh_contacts_build_collider_features(plait_sim *sim, plait_mesh_cont
 	return true;
 }
 
+/* The largest of bound[] over element e and the elements across its edges. */
+static float reach_over_neighbours(const plait_mesh_contacts *mc, const float *bound, int e)
+{
+	float reach = bound[e];
+	for (int q = 0; q < 3; ++q) {
+		int n = mc->neighbours[e][q];
+		reach = n >= 0 ? plait_maxf(reach, bound[n]) : reach;
+	}
+	return reach;
+}
+
+/* Whether element e's longest edge is past its bound. */
+static bool outgrown(const plait_particles *p, const plait_mesh_contacts *mc, int e)
+{
+	return longest_edge_sq(p, &mc->elements[e]) > mc->cloth_bound[e] * mc->cloth_bound[e];
+}
+
 /* The longest edge of each cloth triangle and curve segment that meets filtered colliders, into
  * mc->cloth_bound (grown by `slack`), and each one's D for its element pairs with them, into
  * mc->pair_reach: the largest bound over it and the triangles across its edges (an edge-edge
@@ -231,12 +248,7 @@ void plait_mesh_contacts_measure_cloth_edges(const plait_sim *sim, plait_mesh_co
 		/* The neighbours' bounds, read from cloth_bound (at a listing) or from a second pass. */
 		const float *bound = slack > 1.0f ? mc->cloth_bound : mc->pair_reach;
 		for (int e = o->first; e < o->first + o->count; ++e) {
-			float reach = bound[e];
-			for (int q = 0; q < 3; ++q) {
-				int n = mc->neighbours[e][q];
-				reach = n >= 0 ? plait_maxf(reach, bound[n]) : reach;
-			}
-			mc->cloth_bound_scratch[e] = reach;
+			mc->cloth_bound_scratch[e] = reach_over_neighbours(mc, bound, e);
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
 			mc->pair_reach[e] = mc->cloth_bound_scratch[e];
@@ -254,8 +266,7 @@ bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const p
 			continue;
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
-			const element *el = &mc->elements[e];
-			if (longest_edge_sq(p, el) > mc->cloth_bound[e] * mc->cloth_bound[e]) {
+			if (outgrown(p, mc, e)) {
 				return false;
 			}
 		}
@@ -273,7 +284,7 @@ int plait_mesh_contacts_mark_outgrown(const plait_sim *sim, const plait_mesh_con
 			continue;
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
-			if (longest_edge_sq(p, &mc->elements[e]) <= mc->cloth_bound[e] * mc->cloth_bound[e]) {
+			if (!outgrown(p, mc, e)) {
 				continue;
 			}
 			for (int q = -1; q < 3; ++q) {
@@ -301,18 +312,12 @@ void plait_mesh_contacts_rebound_cloth_edges(const plait_sim *sim, plait_mesh_co
 			continue;
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
-			float longest = sqrtf(longest_edge_sq(p, &mc->elements[e]));
-			if (longest > mc->cloth_bound[e]) {
-				mc->cloth_bound[e] = CLOTH_EDGE_SLACK * longest;
+			if (outgrown(p, mc, e)) {
+				mc->cloth_bound[e] = CLOTH_EDGE_SLACK * sqrtf(longest_edge_sq(p, &mc->elements[e]));
 			}
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
-			float reach = mc->cloth_bound[e];
-			for (int q = 0; q < 3; ++q) {
-				int n = mc->neighbours[e][q];
-				reach = n >= 0 ? plait_maxf(reach, mc->cloth_bound[n]) : reach;
-			}
-			mc->pair_reach[e] = reach;
+			mc->pair_reach[e] = reach_over_neighbours(mc, mc->cloth_bound, e);
 		}
 	}
 }

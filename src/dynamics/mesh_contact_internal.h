@@ -161,12 +161,10 @@ typedef struct plait_mesh_contacts {
 	float *guard; /* per particle: how far it may stray from that path */
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
 	long listings;                      /* gathers since the stage was made */
-	long relistings;                    /* lists mended around strayed vertices since then */
 	int *object_of;                     /* per particle: its collision object, or -1 */
 	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
 	int *object_counts;                 /* per collision object: scratch of object_shifts */
 	float *allowance;                   /* per pair of objects: how far their boxes must reach across */
-	float allowance_max;
 	/* Failsafe scratch: union-find over particles, and the particles it touched. */
 	int particle_capacity;
 	int *zone_parent;
@@ -192,6 +190,12 @@ typedef struct plait_mesh_contacts {
 /* A list whose vertices strayed from their paths, at most one in this many, is mended around
  * them (the failsafe sweeps around them); otherwise it is gathered again (or traversed). */
 #define STRAY_SHARE 8
+
+/* Whether `strays` of `count` particles are few enough to mend (or sweep) around. */
+static inline bool plait_mesh_contacts_few_strays(int strays, int count)
+{
+	return strays > 0 && strays <= count / STRAY_SHARE;
+}
 
 /* The rounding allowance of the cheap distance bounds (mesh_contact_geometry.c) and of the
  * element pair walk's rejections (mesh_contact_pairs.c), scene units. */
@@ -335,9 +339,9 @@ void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
  * numbers: each flagged element's box queried against the trees of the objects it meets. */
 void plait_mesh_contacts_query_around(const plait_sim *sim, const plait_mesh_contacts *mc,
                                       bool with_allowance, plait_element_pair_visitor *visit, void *context);
-/* Whether the list still holds every pair that can touch or cross (now, and with with_start at
- * the substep's start). */
-bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start);
+/* Whether the list still holds every pair that can touch or cross (at the substep's start and
+ * now). */
+bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc);
 /* Whether the list holds every pair of two vertices that kept within their guards over the
  * substep, with the others flagged in strayed[] (per particle; set to 1, never cleared here)
  * and counted into *stray_count. False (nothing flagged) when it holds no pair at all: out of

@@ -217,12 +217,10 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	/* Boxes reach across by their elements' motions relative to their objects' (fit_boxes) and
 	 * the objects' relative motion (here). */
-	mc->allowance_max = 0.0f;
 	for (int a = 0; a < mc->object_count; ++a) {
 		for (int b = 0; b < mc->object_count; ++b) {
 			float allow = (float)LIST_SUBSTEPS * v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
 			mc->allowance[a * mc->object_count + b] = allow;
-			mc->allowance_max = plait_maxf(mc->allowance_max, allow);
 		}
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
@@ -243,12 +241,11 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 
 /* Whether the list still holds every pair that can touch or cross: within LIST_SUBSTEPS
  * substeps of the gather's, every vertex within its guard of its path (see
- * plait_mesh_contacts_gather) at the substep's start (with `with_start`) and now. A substep's
+ * plait_mesh_contacts_gather) at the substep's start and now. A substep's
  * paths run straight between those, so they keep as near the vertices' paths. With `strayed`
  * (one flag per particle), the vertices out of their guards are flagged and counted into
  * *stray_count instead: the list then holds every pair of two vertices that are not. */
-static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start, uint8_t *strayed,
-                       int *stray_count)
+static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
 {
 	if (!mc->list_valid) {
 		return false;
@@ -272,7 +269,7 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, bool with_
 			continue;
 		}
 		bool out = false;
-		for (int when = with_start ? 0 : 1; when < 2 && !out; ++when) {
+		for (int when = 0; when < 2 && !out; ++when) {
 			/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
 			float along = (float)(since - 1 + when);
 			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
@@ -293,15 +290,15 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, bool with_
 	return true;
 }
 
-bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc, bool with_start)
+bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc)
 {
-	return list_holds(sim, mc, with_start, NULL, NULL);
+	return list_holds(sim, mc, NULL, NULL);
 }
 
 bool plait_mesh_contacts_list_covers_except(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
                                             int *stray_count)
 {
-	return list_holds(sim, mc, true, strayed, stray_count);
+	return list_holds(sim, mc, strayed, stray_count);
 }
 
 void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc)
@@ -391,7 +388,6 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		}
 	}
 	mc->pair_count = kept;
-	mc->relistings += 1;
 	mc->out_of_memory = false;
 	fit_boxes(sim, mc, false, 0.0f, false);
 	if (mc->features != NULL) {
