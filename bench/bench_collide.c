@@ -4,7 +4,9 @@
  * For each scene and run: ms/frame (median of the runs, checker time excluded), the share of
  * it spent in collisions (plait_frame_stats.collision_ms), and over all frames: the most
  * crossing triangle pairs in a frame, the frames with any, the most vertices inside colliders,
- * CCD hits and failsafe activations; at the end, stacked cloths out of order. One line per run:
+ * CCD hits and failsafe activations; at the end, stacked cloths out of order, and a hash of the
+ * cloths' final positions (the same bits from two builds: the same results). first_ms is the
+ * first frame alone: it builds the collision elements, trees and rest pairs. One line per run:
  *
  *   scene=pile n=64 threads=1 ms=12.3 collision=0.41 worst_crossings=0 crossing_frames=0 ...
  *
@@ -17,6 +19,7 @@
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,7 +47,8 @@ static int compare_doubles(const void *a, const void *b)
 }
 
 typedef struct run_result {
-	double ms, collision_ms;
+	double ms, first_ms, collision_ms;
+	uint64_t state; /* FNV-1a over the cloths' final positions' bits */
 	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe, order_violations;
 	int frames;
 	double features_kept, features_left_out; /* collider corners and edges met, summed over frames */
@@ -80,6 +84,9 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 			break;
 		}
 		stepping += now_seconds() - start;
+		if (f == 0) {
+			r.first_ms = 1e3 * (now_seconds() - start);
+		}
 		plait_frame_stats stats = plait_world_get_stats(scene.world);
 		r.collision_ms += stats.collision_ms;
 		r.ccd_hits += stats.ccd_hits;
@@ -111,6 +118,18 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 	r.ms = 1e3 * stepping / r.frames;
 	r.collision_ms /= r.frames;
 	r.order_violations = collide_scene_order_violations(&scene);
+	r.state = 1469598103934665603ull;
+	for (int c = 0; c < scene.cloth_count; ++c) {
+		int count = plait_object_get_vertex_count(scene.cloths[c]);
+		plait_vec3 *x = malloc(sizeof *x * (size_t)(count > 0 ? count : 1));
+		if (x != NULL && plait_object_get_positions(scene.cloths[c], 0, count, x, &error) == PLAIT_OK) {
+			const unsigned char *bytes = (const unsigned char *)x;
+			for (size_t k = 0; k < sizeof *x * (size_t)count; ++k) {
+				r.state = (r.state ^ bytes[k]) * 1099511628211ull;
+			}
+		}
+		free(x);
+	}
 	collide_scene_destroy(&scene);
 #ifdef PLAIT_BENCH_HAVE_POOL
 	if (pool != NULL) {
@@ -166,11 +185,12 @@ int main(int argc, char **argv)
 		printf(
 		    "scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d crossing_frames=%d "
 		    "worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d failsafe=%d "
-		    "collider_features=%.0f/%.0f%s\n",
+		    "collider_features=%.0f/%.0f first_ms=%.1f state=%016llx%s\n",
 		    collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
 		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.worst_in_round,
 		    last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
-		    (last.features_kept + last.features_left_out) / last.frames, last.failed ? " FAILED" : "");
+		    (last.features_kept + last.features_left_out) / last.frames, last.first_ms,
+		    (unsigned long long)last.state, last.failed ? " FAILED" : "");
 		fflush(stdout);
 		failures += last.failed;
 		free(ms);

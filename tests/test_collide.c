@@ -646,6 +646,136 @@ Test(collide, sheets_closing_steadily_meet_in_contacts_listed_a_substep_ahead)
 	plait_destroy_world(world);
 }
 
+/* A listed pair's key: its type and its vertices, each primitive's in order, the primitives in
+ * order too (an edge pair may be listed either way round). */
+static unsigned long long pair_key(int type, const int *v)
+{
+	int w[4] = {v[0], v[1], v[2], v[3]};
+	int first = type == PAIR_EDGE_EDGE ? 2 : 1;
+	for (int i = 0; i < 4; ++i) {
+		for (int j = i + 1; j < 4; ++j) {
+			bool same_side = (i < first) == (j < first);
+			if (same_side && w[j] < w[i]) {
+				int s = w[i];
+				w[i] = w[j];
+				w[j] = s;
+			}
+		}
+	}
+	if (type == PAIR_EDGE_EDGE && (w[2] < w[0] || (w[2] == w[0] && w[3] < w[1]))) {
+		int s0 = w[0], s1 = w[1];
+		w[0] = w[2];
+		w[1] = w[3];
+		w[2] = s0;
+		w[3] = s1;
+	}
+	return ((unsigned long long)type << 60) | ((unsigned long long)w[0] << 45) |
+	       ((unsigned long long)w[1] << 30) | ((unsigned long long)w[2] << 15) | (unsigned long long)w[3];
+}
+
+static int compare_keys(const void *a, const void *b)
+{
+	unsigned long long x = *(const unsigned long long *)a, y = *(const unsigned long long *)b;
+	return x < y ? -1 : x > y;
+}
+
+/* A sheet whose edges (6.7 mm) are shorter than its contact distance (1 cm): its element pairs
+ * hold rest pairs beside pairs that are not, and the gather passes over the rest pairs by
+ * their slots. Squeezed to half its width and rippled, the list must still hold every vertex-
+ * face and edge-edge pair that is within the contact distance and was not at the start, and no
+ * rest pair. */
+Test(collide, a_fine_sheets_list_holds_every_pair_in_reach_but_its_rest_pairs)
+{
+	plait_world_id world = weightless_world();
+	plait_object_id cloth = sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.005f, 0);
+	cr_assert(test_step_frames(world, 1));
+	plait_sim *sim = &world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	cr_assert(mc != NULL && mc->active);
+	int partial = 0;
+	for (int k = 0; k < mc->near_start[mc->element_count]; ++k) {
+		partial += mc->near_list[k].rest_slots != ALL_REST_SLOTS;
+	}
+	cr_assert_gt(partial, 100, "only %d element pairs hold rest pairs beside others", partial);
+	plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		vec3 s = p->x_start[i];
+		vec3 x = v3(0.5f * s.x + 0.013f * sinf(40.0f * s.z), 0.004f * sinf(70.0f * s.x + 30.0f * s.z), s.z);
+		p->point[i].x = x;
+		p->x_prev[i] = x;
+	}
+	plait_mesh_contacts_gather(sim, mc);
+	unsigned long long *listed = malloc(sizeof *listed * (size_t)(mc->pair_count > 0 ? mc->pair_count : 1));
+	for (int k = 0; k < mc->pair_count; ++k) {
+		listed[k] = pair_key(mc->pairs[k].type, mc->pairs[k].v);
+	}
+	qsort(listed, (size_t)mc->pair_count, sizeof *listed, compare_keys);
+	int triangles = plait_object_get_triangles(cloth, NULL, 0);
+	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
+	plait_object_get_triangles(cloth, tri, triangles);
+	int first = mc->elements[0].v[0] - tri[0]; /* the cloth's first particle */
+	const float contact = 0.01f, margin = 1e-4f;
+	int expected = 0, missing = 0, rest_listed = 0;
+	/* Every vertex against every triangle, every edge against every edge (each edge once: from
+	 * the triangle side where it runs from its lower vertex, or both when on the border). */
+	for (int t = 0; t < triangles; ++t) {
+		for (int i = 0; i < p->count; ++i) {
+			int v[4] = {i, first + tri[3 * t], first + tri[3 * t + 1], first + tri[3 * t + 2]};
+			if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3]) {
+				continue;
+			}
+			vec3 now[4], rest[4];
+			for (int m = 0; m < 4; ++m) {
+				now[m] = p->point[v[m]].x;
+				rest[m] = p->x_start[v[m]];
+			}
+			float d = plait_mesh_contacts_primitive_distance(PAIR_VERTEX_FACE, now);
+			float r = plait_mesh_contacts_primitive_distance(PAIR_VERTEX_FACE, rest);
+			unsigned long long key = pair_key(PAIR_VERTEX_FACE, v);
+			bool found = bsearch(&key, listed, (size_t)mc->pair_count, sizeof key, compare_keys) != NULL;
+			if (d < contact - margin && r > contact + margin) {
+				expected += 1;
+				missing += !found;
+			}
+			rest_listed += found && r < contact - margin;
+		}
+	}
+	for (int t = 0; t < triangles; ++t) {
+		for (int u = t; u < triangles; ++u) {
+			for (int i = 0; i < 3; ++i) {
+				for (int j = 0; j < 3; ++j) {
+					int v[4] = {first + tri[3 * t + i], first + tri[3 * t + (i + 1) % 3],
+					            first + tri[3 * u + j], first + tri[3 * u + (j + 1) % 3]};
+					if (v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3]) {
+						continue;
+					}
+					vec3 now[4], rest[4];
+					for (int m = 0; m < 4; ++m) {
+						now[m] = p->point[v[m]].x;
+						rest[m] = p->x_start[v[m]];
+					}
+					float d = plait_mesh_contacts_primitive_distance(PAIR_EDGE_EDGE, now);
+					float r = plait_mesh_contacts_primitive_distance(PAIR_EDGE_EDGE, rest);
+					unsigned long long key = pair_key(PAIR_EDGE_EDGE, v);
+					bool found =
+					    bsearch(&key, listed, (size_t)mc->pair_count, sizeof key, compare_keys) != NULL;
+					if (d < contact - margin && r > contact + margin) {
+						expected += 1;
+						missing += !found;
+					}
+					rest_listed += found && r < contact - margin;
+				}
+			}
+		}
+	}
+	cr_expect_gt(expected, 1000, "only %d pairs came within reach", expected);
+	cr_expect_eq(missing, 0, "%d of %d pairs in reach not listed", missing, expected);
+	cr_expect_eq(rest_listed, 0, "%d rest pairs listed", rest_listed);
+	free(tri);
+	free(listed);
+	plait_destroy_world(world);
+}
+
 /* A sheet at rest and one moving into it at 1 m/s, weightless: who moves depends on layers. */
 static void push_between_layers(int resting_layer, int moving_layer, float *resting_moved, float *moving_end)
 {

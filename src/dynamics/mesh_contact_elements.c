@@ -39,12 +39,13 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	mc->object_counts = NULL;
 	mc->shift = NULL;
 	mc->allowance = NULL;
-	plait_free(a, mc->excluded_start);
-	plait_free(a, mc->excluded_list);
+	plait_free(a, mc->near_start);
+	plait_free(a, mc->near_list);
 	plait_free(a, mc->rest_pairs);
 	mc->rest_pairs = NULL;
 	mc->rest_count = mc->rest_capacity = 0;
-	mc->excluded_start = mc->excluded_list = NULL;
+	mc->near_start = NULL;
+	mc->near_list = NULL;
 	mc->objects = NULL;
 	mc->object_count = 0;
 	mc->elements = NULL;
@@ -273,18 +274,18 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	return true;
 }
 
-static int compare_int_pairs(const void *a, const void *b)
+static int compare_near_pairs(const void *a, const void *b)
 {
-	const int *x = a, *y = b;
-	if (x[0] != y[0]) {
-		return x[0] < y[0] ? -1 : 1;
+	const near_pair *x = a, *y = b;
+	if (x->a != y->a) {
+		return x->a < y->a ? -1 : 1;
 	}
-	return x[1] < y[1] ? -1 : x[1] > y[1];
+	return x->b < y->b ? -1 : x->b > y->b;
 }
 
-/* The rest pairs and the excluded element pairs of every self-colliding object, from the start
- * positions: element boxes grown so that primitives within their contact distance at the
- * start overlap. */
+/* The rest pairs and the element pairs that own them (the near lists) of every self-colliding
+ * object, from the start positions: element boxes grown so that primitives within their
+ * contact distance at the start overlap. */
 static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
@@ -314,20 +315,20 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 		plait_element_tree_pairs(&o->tree, mc->lower + o->first, mc->upper + o->first,
 		                         plait_mesh_contacts_visit_object_elements, &self);
 	}
-	mc->excluded_start = plait_alloc_zero(a, (size_t)mc->element_count + 1, sizeof(int));
-	mc->excluded_list =
-	    plait_alloc_zero(a, (size_t)(pass.excluded_count > 0 ? pass.excluded_count : 1), sizeof(int));
-	bool ok = !pass.failed && mc->excluded_start != NULL && mc->excluded_list != NULL;
-	if (ok && pass.excluded_count > 0) {
-		qsort(pass.excluded, (size_t)pass.excluded_count, sizeof *pass.excluded, compare_int_pairs);
-		for (int k = 0; k < pass.excluded_count; ++k) {
-			mc->excluded_start[pass.excluded[k][0] + 1] += 1;
-			mc->excluded_list[k] = pass.excluded[k][1];
+	mc->near_start = plait_alloc_zero(a, (size_t)mc->element_count + 1, sizeof(int));
+	mc->near_list =
+	    plait_alloc_zero(a, (size_t)(pass.near_count > 0 ? pass.near_count : 1), sizeof *mc->near_list);
+	bool ok = !pass.failed && mc->near_start != NULL && mc->near_list != NULL;
+	if (ok && pass.near_count > 0) {
+		qsort(pass.near, (size_t)pass.near_count, sizeof *pass.near, compare_near_pairs);
+		for (int k = 0; k < pass.near_count; ++k) {
+			mc->near_start[pass.near[k].a + 1] += 1;
+			mc->near_list[k] = (near_element){pass.near[k].b, pass.near[k].rest_slots};
 		}
 		for (int e = 0; e < mc->element_count; ++e) {
-			mc->excluded_start[e + 1] += mc->excluded_start[e];
+			mc->near_start[e + 1] += mc->near_start[e];
 		}
 	}
-	plait_free(a, pass.excluded);
+	plait_free(a, pass.near);
 	return ok;
 }

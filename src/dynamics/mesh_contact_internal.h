@@ -62,6 +62,21 @@ typedef struct collider_features {
 	float reach[6];          /* vertex k: reach[k]; edge k: reach[3 + k]; scene units */
 } collider_features;
 
+/* An element pair that owns rest pairs (plait_mesh_contacts.near_list), under its lower
+ * element: the other, and the slots of its rest pairs as walked from the lower one. */
+typedef struct near_element {
+	int element;
+	uint32_t rest_slots;
+} near_element;
+
+/* The primitive pairs an element pair (a, b) owns, numbered as the walk meets them:
+ * a vertex of a (k) against b: k; a vertex of b (k) against a: 3 + k; vertex k of a against
+ * vertex m of b: 6 + 3k + m; edge i of a against edge j of b: 15 + 3i + j. */
+#define VERTEX_SLOT(turn, k) (3 * (turn) + (k))
+#define VERTEX_VERTEX_SLOT(k, m) (6 + 3 * (k) + (m))
+#define EDGE_EDGE_SLOT(i, j) (15 + 3 * (i) + (j))
+#define ALL_REST_SLOTS 0xffffffffu
+
 /* An element's box, centroid and normal at the gather, for its cheap rejections. */
 typedef struct element_shape {
 	vec3 lower, upper;
@@ -127,13 +142,15 @@ typedef struct plait_mesh_contacts {
 	/* Neighbours in the start shape. Within a self-colliding object, primitives closer than
 	 * their self-collision distance at the start (seed 000 §4.5) never push each other: that is
 	 * left to the object's own constraints. They may still not pass through each other: they
-	 * are the rest pairs, swept by the failsafe in every substep. Element pairs all of whose
-	 * primitive pairs share a vertex or are rest pairs are excluded whole: per element, a
-	 * sorted run of excluded_list from excluded_start[e] to excluded_start[e + 1]. */
+	 * are the rest pairs, swept by the failsafe in every substep. Each element pair that owns a
+	 * rest pair is noted once, under its lower element: a sorted run of near_list from
+	 * near_start[e] to near_start[e + 1], with the slots of its rest pairs (rest_slot), or
+	 * ALL_REST_SLOTS when every primitive pair it owns is a rest pair or shares a vertex (it is
+	 * then excluded whole). The gather passes over rest slots before any distance. */
 	int rest_count, rest_capacity;
 	struct contact_pair *rest_pairs;
-	int *excluded_start;
-	int *excluded_list;
+	int *near_start;
+	struct near_element *near_list;
 	bool active;
 	bool gathered;   /* the candidates of this substep are ready */
 	bool list_valid; /* the list of the last gather may serve again (see plait_mesh_contacts_list_covers) */
@@ -222,10 +239,14 @@ typedef struct pair_pass {
 	bool around_only;
 	float pair_slack; /* STAGE_GATHER: how far its primitives may come closer (guards, allowance) */
 	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
-	 * (or shares a vertex); the element pairs that are, for the exclusion lists. */
+	 * (or shares a vertex), and the slots of its rest pairs (slot: the one being visited);
+	 * the element pairs that own rest pairs, for the near lists. STAGE_GATHER: the slots of
+	 * the element pair's rest pairs, passed over. */
 	bool all_rest;
-	int excluded_count, excluded_capacity;
-	int (*excluded)[2];
+	int slot;
+	uint32_t rest_slots;
+	int near_count, near_capacity;
+	struct near_pair *near;
 	bool failed;
 	int swept; /* STAGE_FAILSAFE: primitive pairs swept */
 	/* STAGE_GATHER: where the listed pairs go; with fixed_capacity (on a worker, where the
@@ -239,6 +260,12 @@ typedef struct pair_pass {
 	sweep_hit *hits_out;
 	int hits_count;
 } pair_pass;
+
+/* An element pair that owns rest pairs, as found (the lower element first). */
+typedef struct near_pair {
+	int a, b;
+	uint32_t rest_slots;
+} near_pair;
 
 /* Element pairs of two objects (or of one with itself), in global element numbers. */
 typedef struct object_pass {

@@ -8,17 +8,38 @@
 #include "collision/closest.h"
 #include "dynamics/contact.h"
 
-static bool excluded(const plait_mesh_contacts *mc, int a, int b)
+/* The slots of element pair (b, a)'s rest pairs from those of (a, b): the two elements'
+ * parts swapped. */
+static uint32_t swap_slots(uint32_t slots)
 {
-	if (mc->excluded_start == NULL) {
-		return false;
-	}
-	for (int k = mc->excluded_start[a]; k < mc->excluded_start[a + 1]; ++k) {
-		if (mc->excluded_list[k] >= b) {
-			return mc->excluded_list[k] == b;
+	uint32_t swapped = ((slots >> 3) & 7u) | ((slots & 7u) << 3);
+	for (int k = 0; k < 3; ++k) {
+		for (int m = 0; m < 3; ++m) {
+			swapped |= ((slots >> VERTEX_VERTEX_SLOT(k, m)) & 1u) << VERTEX_VERTEX_SLOT(m, k);
+			swapped |= ((slots >> EDGE_EDGE_SLOT(k, m)) & 1u) << EDGE_EDGE_SLOT(m, k);
 		}
 	}
-	return false;
+	return swapped;
+}
+
+/* The slots of the rest pairs element pair (a, b) of one object owns, as walked from a (0:
+ * none; ALL_REST_SLOTS: excluded whole). */
+static uint32_t rest_slots(const plait_mesh_contacts *mc, int a, int b)
+{
+	if (mc->near_start == NULL) {
+		return 0;
+	}
+	int low = a < b ? a : b, high = a < b ? b : a;
+	for (int k = mc->near_start[low]; k < mc->near_start[low + 1]; ++k) {
+		if (mc->near_list[k].element >= high) {
+			if (mc->near_list[k].element != high) {
+				return 0;
+			}
+			uint32_t slots = mc->near_list[k].rest_slots;
+			return a < b || slots == ALL_REST_SLOTS ? slots : swap_slots(slots);
+		}
+	}
+	return 0;
 }
 
 static bool shares_vertex(const int *v, int n)
@@ -153,6 +174,7 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 			pass->all_rest = false;
 			return;
 		}
+		pass->rest_slots |= 1u << pass->slot;
 		if (type == PAIR_VERTEX_VERTEX) {
 			return; /* no crossing to watch */
 		}
@@ -301,6 +323,8 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 {
 	const element *ea = &pass->mc->elements[a], *eb = &pass->mc->elements[b];
 	bool cull = pass->stage == STAGE_GATHER, failsafe = pass->stage == STAGE_FAILSAFE;
+	/* The gather passes over the rest pairs (never listed) before any distance. */
+	uint32_t skip = cull ? pass->rest_slots : 0u;
 	const element_shape *shape[2] = {&pass->mc->shapes[a], &pass->mc->shapes[b]};
 	vec3 x[2][3] = {{{0}}};
 	if (cull) {
@@ -353,24 +377,34 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 			if (shared && !(turn == 0 && self_allows(ma, PAIR_VERTEX_VERTEX))) {
 				continue;
 			}
+			int slot = VERTEX_SLOT(turn, k);
+			bool to_face = other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
+			               vertex_meets_face(mv, mo) && !shared && !(skip & (1u << slot));
+			bool to_edge = other->size == 2 && vertex_side->size == 1 && !shared && !(skip & (1u << slot));
+			bool to_vertices = turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX);
+			if (!to_face && !to_edge && !to_vertices) {
+				continue;
+			}
 			bool far = cull && !shared && point_far(vx[k], other, os, ox, gap);
-			if (other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
-			    vertex_meets_face(mv, mo) && !far && !shared) {
+			pass->slot = slot;
+			if (to_face && !far) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				v[3] = other->v[2];
 				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
 			}
-			if (other->size == 2 && vertex_side->size == 1 && !far && !shared) {
+			if (to_edge && !far) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				visit_primitives(pass, PAIR_VERTEX_EDGE, v, mv, mo, self);
 			}
-			if (turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX) && !far) {
+			if (to_vertices && !far) {
 				for (int m = 0; m < other->size; ++m) {
-					if ((other->own_vertices & (1u << m)) &&
+					int pair_slot = VERTEX_VERTEX_SLOT(k, m);
+					if ((other->own_vertices & (1u << m)) && !(skip & (1u << pair_slot)) &&
 					    !(cull && boxes_apart(vx[k], vx[k], ox[m], ox[m], gap))) {
 						v[1] = other->v[m];
+						pass->slot = pair_slot;
 						visit_primitives(pass, PAIR_VERTEX_VERTEX, v, mv, mo, self);
 					}
 				}
@@ -394,9 +428,12 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 				             ea->v[i1] == eb->v[j1])) {
 					continue;
 				}
-				if (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap)) {
+				int slot = EDGE_EDGE_SLOT(i, j);
+				if ((skip & (1u << slot)) ||
+				    (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap))) {
 					continue;
 				}
+				pass->slot = slot;
 				v[0] = ea->v[i];
 				v[1] = ea->v[i1];
 				v[2] = eb->v[j];
@@ -415,10 +452,12 @@ static void visit_elements(int a, int b, void *context)
 	const plait_material *ma = &pass->sim->materials[ea->material];
 	const plait_material *mb = &pass->sim->materials[eb->material];
 	bool self = ma->object == mb->object;
-	if (self && excluded(mc, a, b)) {
+	uint32_t slots = self ? rest_slots(mc, a, b) : 0u;
+	if (slots == ALL_REST_SLOTS) {
 		return;
 	}
 	pass->all_rest = true;
+	pass->rest_slots = pass->stage == STAGE_GATHER ? slots : 0u;
 	if (pass->stage == STAGE_GATHER) {
 		/* One list distance for every primitive pair of the two elements, from their largest
 		 * radii and guards: a little generous, and no lookups per primitive pair. */
@@ -434,25 +473,24 @@ static void visit_elements(int a, int b, void *context)
 		                      pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
 	}
 	walk_element_pair(pass, a, b, ma, mb, self);
-	if (pass->stage == STAGE_REST && pass->all_rest && !pass->failed) {
-		if (pass->excluded_count + 2 > pass->excluded_capacity) {
-			int capacity = pass->excluded_capacity < 1024 ? 1024 : 2 * pass->excluded_capacity;
-			int(*bigger)[2] = plait_alloc_zero(&pass->sim->allocator, (size_t)capacity, sizeof *bigger);
+	if (pass->stage == STAGE_REST && (pass->all_rest || pass->rest_slots != 0) && !pass->failed) {
+		if (pass->near_count == pass->near_capacity) {
+			int capacity = pass->near_capacity < 1024 ? 1024 : 2 * pass->near_capacity;
+			near_pair *bigger = plait_alloc_zero(&pass->sim->allocator, (size_t)capacity, sizeof *bigger);
 			if (bigger == NULL) {
 				pass->failed = true;
 				return;
 			}
-			if (pass->excluded_count > 0) {
-				memcpy(bigger, pass->excluded, sizeof *bigger * (size_t)pass->excluded_count);
+			if (pass->near_count > 0) {
+				memcpy(bigger, pass->near, sizeof *bigger * (size_t)pass->near_count);
 			}
-			plait_free(&pass->sim->allocator, pass->excluded);
-			pass->excluded = bigger;
-			pass->excluded_capacity = capacity;
+			plait_free(&pass->sim->allocator, pass->near);
+			pass->near = bigger;
+			pass->near_capacity = capacity;
 		}
-		pass->excluded[pass->excluded_count][0] = a;
-		pass->excluded[pass->excluded_count++][1] = b;
-		pass->excluded[pass->excluded_count][0] = b;
-		pass->excluded[pass->excluded_count++][1] = a;
+		uint32_t found = pass->all_rest ? ALL_REST_SLOTS : pass->rest_slots;
+		pass->near[pass->near_count++] =
+		    (near_pair){a < b ? a : b, a < b ? b : a, a < b || pass->all_rest ? found : swap_slots(found)};
 	}
 }
 
