@@ -335,7 +335,12 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 			                   PARTICLE_GRAIN);
 		}
 		reset_multipliers(sim);
-		if (!plait_contacts_begin_substep(sim)) {
+		/* Collision time: it builds the collision elements, trees and rest pairs when objects
+		 * come or go (the first frame of a self-colliding cloth). */
+		double contacts_start = plait_seconds();
+		bool contacts_begun = plait_contacts_begin_substep(sim);
+		sim->collision_seconds += plait_seconds() - contacts_start;
+		if (!contacts_begun) {
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
 			                       "out of memory in the collision stage; the frame was not advanced");
 		}
