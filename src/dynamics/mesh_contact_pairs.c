@@ -252,14 +252,18 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 			pair.distance = 0.0f;
 		}
 	}
+	/* While the list covers, the pair's vertices stay within their guards (and its objects
+	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
+	 * bound). A pair only the failsafe watches that stays farther apart than the failsafe's
+	 * distance would never be swept (sweep_listed): it is left out. */
+	pair.lower = now - pass->pair_slack;
+	if (pair.distance <= 0.0f && pair.lower > FAILSAFE_DISTANCE) {
+		return;
+	}
 	if (first->collision_layer != second->collision_layer) {
 		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
 	}
 	start_side(&pair, start, end);
-	/* While the list covers, the pair's vertices stay within their guards (and its objects
-	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
-	 * bound). */
-	pair.lower = now - pass->pair_slack;
 	(void)add_pair(pass, &pair);
 }
 
