@@ -209,8 +209,16 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	}
 	if (lower_a.x - upper_b.x > list_distance || lower_b.x - upper_a.x > list_distance ||
 	    lower_a.y - upper_b.y > list_distance || lower_b.y - upper_a.y > list_distance ||
-	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance ||
-	    (now = plait_mesh_contacts_primitive_distance(type, end)) > list_distance) {
+	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance) {
+		return;
+	}
+	/* Edges: the closest points' parameters too, for the test of their ends below (as
+	 * plait_mesh_contacts_primitive_distance computes it). */
+	float edge_s = 0.0f, edge_t = 0.0f;
+	now = type == PAIR_EDGE_EDGE
+	          ? sqrtf(plait_closest_segments(end[0], end[1], end[2], end[3], &edge_s, &edge_t))
+	          : plait_mesh_contacts_primitive_distance(type, end);
+	if (now > list_distance) {
 		return;
 	}
 	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
@@ -245,12 +253,9 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	}
 	/* Edges whose closest points are an end of either are in reach of a vertex-face pair of
 	 * the triangles round that end: only the failsafe watches them. */
-	if (type == PAIR_EDGE_EDGE && pair.distance > 0.0f) {
-		float ps, pt;
-		plait_closest_segments(end[0], end[1], end[2], end[3], &ps, &pt);
-		if (ps <= 0.0f || ps >= 1.0f || pt <= 0.0f || pt >= 1.0f) {
-			pair.distance = 0.0f;
-		}
+	if (type == PAIR_EDGE_EDGE && pair.distance > 0.0f &&
+	    (edge_s <= 0.0f || edge_s >= 1.0f || edge_t <= 0.0f || edge_t >= 1.0f)) {
+		pair.distance = 0.0f;
 	}
 	/* While the list covers, the pair's vertices stay within their guards (and its objects
 	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
