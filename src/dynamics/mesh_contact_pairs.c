@@ -225,14 +225,8 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	if (self) {
 		distance *= first->self_width_scale;
 	}
-	if (self && distance > 0.0f) {
-		/* A rest pair: the failsafe watches it (mc->rest_pairs); no contact. */
-		vec3 initial[4] = {{0}};
-		gather_points(p->x_start, v, n, initial);
-		if (plait_mesh_contacts_primitive_distance(type, initial) < distance) {
-			return;
-		}
-	}
+	/* Rest pairs (the failsafe watches them: mc->rest_pairs) never get here: the walk passes
+	 * over their slots (rest_slots). */
 	gather_points(p->x_prev, v, n, start);
 	contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
 	                     (uint8_t)type,
