@@ -16,6 +16,7 @@
  * others are smooth at the scale of the cloth's triangles), mean over the frames.)
  *
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
+ *                      [--self-flag full|vertex_face|vertex] (of the self-colliding cloths)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
@@ -55,7 +56,8 @@ typedef struct run_result {
 	bool failed;
 } run_result;
 
-static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose)
+static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose,
+                      plait_self_collision_flag self_flag)
 {
 	run_result r = {0};
 	plait_world_def def = plait_default_world_def();
@@ -69,7 +71,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 #endif
 	collide_scene scene;
 	plait_error error;
-	if (!collide_scene_create(&scene, kind, n, &def, &error)) {
+	if (!collide_scene_create_flagged(&scene, kind, n, &def, self_flag, &error)) {
 		fprintf(stderr, "bench_collide: %s: %s\n", collide_scene_names[kind], error.message);
 		exit(1);
 	}
@@ -143,6 +145,7 @@ int main(int argc, char **argv)
 {
 	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false;
 	int n = 0, frames = 0, runs = 1, threads = 1;
+	plait_self_collision_flag self_flag = plait_default_cloth_def().self_collision_flag;
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
 			n = atoi(argv[++a]);
@@ -154,6 +157,11 @@ int main(int argc, char **argv)
 			threads = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--no-check") == 0) {
 			check = false;
+		} else if (strcmp(argv[a], "--self-flag") == 0 && a + 1 < argc) {
+			++a;
+			self_flag = strcmp(argv[a], "vertex") == 0        ? PLAIT_SELF_COLLIDE_VERTEX
+			            : strcmp(argv[a], "vertex_face") == 0 ? PLAIT_SELF_COLLIDE_VERTEX_FACE
+			                                                  : PLAIT_SELF_COLLIDE_FULL_SURFACE;
 		} else if (strcmp(argv[a], "--verbose") == 0) {
 			verbose = true;
 		} else {
@@ -164,7 +172,8 @@ int main(int argc, char **argv)
 			if (k == SCENE_COUNT || runs < 1) {
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
-				        "[--no-check] [--verbose]\n  SCENE: drape thin-box pile twist arm hang-self\n");
+				        "[--no-check] [--self-flag full|vertex_face|vertex] [--verbose]\n"
+				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
 			chosen[k] = any = true;
@@ -178,7 +187,7 @@ int main(int argc, char **argv)
 		double *ms = malloc(sizeof(double) * (size_t)runs);
 		run_result last = {0};
 		for (int r = 0; r < runs; ++r) {
-			last = run((collide_scene_kind)k, n, frames, threads, check, verbose);
+			last = run((collide_scene_kind)k, n, frames, threads, check, verbose, self_flag);
 			ms[r] = last.ms;
 		}
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);

@@ -19,13 +19,15 @@ typedef struct scene_totals {
 	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe;
 } scene_totals;
 
-/* Runs a scene for `frames` (0: its own length), checking every frame. */
-static scene_totals run_scene(collide_scene_kind kind, int n, int frames, collide_scene *kept)
+/* Runs a scene for `frames` (0: its own length), checking every frame, with the given
+ * self-collision flag. */
+static scene_totals run_flagged_scene(collide_scene_kind kind, int n, int frames,
+                                      plait_self_collision_flag flag, collide_scene *kept)
 {
 	collide_scene scene;
 	plait_error error;
-	cr_assert(collide_scene_create(&scene, kind, n, NULL, &error), "%s: %s", collide_scene_names[kind],
-	          error.message);
+	cr_assert(collide_scene_create_flagged(&scene, kind, n, NULL, flag, &error), "%s: %s",
+	          collide_scene_names[kind], error.message);
 	scene_totals totals = {0};
 	int count = frames > 0 ? frames : scene.frames;
 	for (int f = 1; f <= count; ++f) {
@@ -60,6 +62,11 @@ static scene_totals run_scene(collide_scene_kind kind, int n, int frames, collid
 		collide_scene_destroy(&scene);
 	}
 	return totals;
+}
+
+static scene_totals run_scene(collide_scene_kind kind, int n, int frames, collide_scene *kept)
+{
+	return run_flagged_scene(kind, n, frames, plait_default_cloth_def().self_collision_flag, kept);
 }
 
 static void expect_clean(const scene_totals *t, const char *name)
@@ -130,6 +137,17 @@ Test(collide, hang_over_a_sphere_mesh_with_self_collision)
 {
 	scene_totals t = run_scene(SCENE_HANG_SELF, 24, 200, NULL);
 	expect_clean(&t, "hang-self");
+}
+
+/* The self-collision flag chooses which pairs of a cloth's primitives push each other (seed 000
+ * §4.5.1); with any of them the cloth must not pass through itself: the failsafe still watches
+ * vertex-face and edge-edge pairs. */
+Test(collide, a_cloth_with_vertex_or_vertex_face_self_collision_never_crosses_itself)
+{
+	scene_totals t = run_flagged_scene(SCENE_HANG_SELF, 24, 200, PLAIT_SELF_COLLIDE_VERTEX_FACE, NULL);
+	expect_clean(&t, "hang-self, vertex-face");
+	t = run_flagged_scene(SCENE_HANG_SELF, 24, 200, PLAIT_SELF_COLLIDE_VERTEX, NULL);
+	expect_clean(&t, "hang-self, vertex");
 }
 
 /* ---- Parts ------------------------------------------------------------------------------- */

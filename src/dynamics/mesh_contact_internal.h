@@ -238,6 +238,10 @@ typedef struct pair_pass {
 	 * only primitive pairs with a vertex flagged in mc->around, with twice the guards. */
 	bool around_only;
 	float pair_slack; /* STAGE_GATHER: how far its primitives may come closer (guards, allowance) */
+	/* STAGE_GATHER: the list distance of the element pair's primitive pairs that only the
+	 * failsafe watches (those the self-collision flag does not push): they matter only where
+	 * they may cross while the list serves. */
+	float failsafe_reach;
 	/* STAGE_REST: whether every primitive pair of the element pair met so far is a rest pair
 	 * (or shares a vertex), and the slots of its rest pairs (slot: the one being visited);
 	 * the element pairs that own rest pairs, for the near lists. STAGE_GATHER: the slots of

@@ -96,6 +96,22 @@ static bool add_pair(pair_pass *pass, const contact_pair *pair)
 	return true;
 }
 
+/* Whether pairs of this type within an object of material m push each other: its
+ * self-collision flag's choice (seed 000 §4.5.1). The others of vertex-face and edge-edge are
+ * still listed for the failsafe, which keeps the object from passing through itself whatever
+ * the flag. */
+static bool self_pushes(const plait_material *m, int type)
+{
+	switch (m->self_flag) {
+	case PLAIT_SELF_COLLIDE_VERTEX:
+		return type == PAIR_VERTEX_VERTEX;
+	case PLAIT_SELF_COLLIDE_VERTEX_FACE:
+		return type == PAIR_VERTEX_FACE;
+	default:
+		return type == PAIR_VERTEX_FACE || type == PAIR_EDGE_EDGE;
+	}
+}
+
 /* Which side of the other primitive the first is on at the start of the substep. */
 static void start_side(contact_pair *pair, const vec3 *start, const vec3 *end)
 {
@@ -192,7 +208,10 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		}
 		return;
 	}
-	float list_distance = pass->list_distance;
+	/* A pair the self-collision flag leaves to the failsafe is listed only when it may cross
+	 * while the list serves (see the end). */
+	bool pushes = !self || self_pushes(first, type);
+	float list_distance = pushes ? pass->list_distance : pass->failsafe_reach;
 	float now = 0.0f;
 	vec3 start[4] = {{0}}, end[4] = {{0}};
 	gather_current(p->point, v, n, end);
@@ -221,9 +240,12 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	if (now > list_distance) {
 		return;
 	}
-	float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
-	if (self) {
-		distance *= first->self_width_scale;
+	float distance = 0.0f;
+	if (pushes) {
+		distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+		if (self) {
+			distance *= first->self_width_scale;
+		}
 	}
 	/* Rest pairs (the failsafe watches them: mc->rest_pairs) never get here: the walk passes
 	 * over their slots (rest_slots). */
@@ -264,18 +286,6 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	}
 	start_side(&pair, start, end);
 	(void)add_pair(pass, &pair);
-}
-
-static bool self_allows(const plait_material *m, int type)
-{
-	switch (m->self_flag) {
-	case PLAIT_SELF_COLLIDE_VERTEX:
-		return type == PAIR_VERTEX_VERTEX;
-	case PLAIT_SELF_COLLIDE_VERTEX_FACE:
-		return type == PAIR_VERTEX_FACE;
-	default:
-		return type == PAIR_VERTEX_FACE || type == PAIR_EDGE_EDGE;
-	}
 }
 
 /* Whether boxes [la, ua] and [lb, ub] are farther apart than `gap` along an axis. */
@@ -338,6 +348,9 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 		}
 	}
 	float gap = pass->list_distance;
+	/* Pairs the self-collision flag leaves to the failsafe are culled within its reach. */
+	bool face_pushes = !self || self_pushes(ma, PAIR_VERTEX_FACE);
+	float edge_gap = !self || self_pushes(ma, PAIR_EDGE_EDGE) ? gap : pass->failsafe_reach;
 	/* A filtered collider's corners and edges that its smooth reach keeps from this cloth's. */
 	uint8_t own_vertices[2] = {ea->own_vertices, eb->own_vertices},
 	        own_edges[2] = {ea->own_edges, eb->own_edges};
@@ -377,20 +390,22 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 			 * but one vertex-vertex pair shares a vertex, which visit_primitives passes over;
 			 * skipped here before any distance. */
 			bool shared = self && (v[0] == other->v[0] || v[0] == other->v[1] || v[0] == other->v[2]);
-			if (shared && !(turn == 0 && self_allows(ma, PAIR_VERTEX_VERTEX))) {
+			if (shared && !(turn == 0 && self_pushes(ma, PAIR_VERTEX_VERTEX))) {
 				continue;
 			}
 			int slot = VERTEX_SLOT(turn, k);
-			bool to_face = other->size == 3 && (!self || self_allows(ma, PAIR_VERTEX_FACE)) &&
-			               vertex_meets_face(mv, mo) && !shared && !(skip & (1u << slot));
+			bool to_face = other->size == 3 && vertex_meets_face(mv, mo) && !shared && !(skip & (1u << slot));
 			bool to_edge = other->size == 2 && vertex_side->size == 1 && !shared && !(skip & (1u << slot));
-			bool to_vertices = turn == 0 && self && !failsafe && self_allows(ma, PAIR_VERTEX_VERTEX);
+			bool to_vertices = turn == 0 && self && !failsafe && self_pushes(ma, PAIR_VERTEX_VERTEX);
 			if (!to_face && !to_edge && !to_vertices) {
 				continue;
 			}
 			bool far = cull && !shared && point_far(vx[k], other, os, ox, gap);
+			/* A face the flag leaves to the failsafe: within its smaller reach. */
+			bool far_face = far || (cull && to_face && !face_pushes &&
+			                        point_far(vx[k], other, os, ox, pass->failsafe_reach));
 			pass->slot = slot;
-			if (to_face && !far) {
+			if (to_face && !far_face) {
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				v[3] = other->v[2];
@@ -414,7 +429,7 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 			}
 		}
 	}
-	if (ea->size >= 2 && eb->size >= 2 && (!self || self_allows(ma, PAIR_EDGE_EDGE))) {
+	if (ea->size >= 2 && eb->size >= 2) {
 		int edges_a = ea->size == 2 ? 1 : 3, edges_b = eb->size == 2 ? 1 : 3;
 		for (int i = 0; i < edges_a; ++i) {
 			if (!(own_edges[0] & (1u << i))) {
@@ -433,7 +448,7 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 				}
 				int slot = EDGE_EDGE_SLOT(i, j);
 				if ((skip & (1u << slot)) ||
-				    (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], gap))) {
+				    (cull && segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], edge_gap))) {
 					continue;
 				}
 				pass->slot = slot;
@@ -474,6 +489,7 @@ static void visit_elements(int a, int b, void *context)
 		pass->pair_slack = (float)LIST_SUBSTEPS * relative + guards;
 		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
 		                      pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
+		pass->failsafe_reach = pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
 	}
 	walk_element_pair(pass, a, b, ma, mb, self);
 	if (pass->stage == STAGE_REST && (pass->all_rest || pass->rest_slots != 0) && !pass->failed) {

@@ -169,6 +169,7 @@ static plait_object_id add_sphere(collide_scene *scene, float r, plait_vec3 cent
 static bool build(collide_scene *scene, int n, plait_error *error)
 {
 	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.self_collision_flag = scene->self_flag;
 	cloth.surface.thickness = 0.01f;
 	cloth.surface.friction = 0.3f;
 	switch (scene->kind) {
@@ -317,8 +318,17 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, const plait_world_def *base,
                           plait_error *error)
 {
+	return collide_scene_create_flagged(scene, kind, n, base, plait_default_cloth_def().self_collision_flag,
+	                                    error);
+}
+
+bool collide_scene_create_flagged(collide_scene *scene, collide_scene_kind kind, int n,
+                                  const plait_world_def *base, plait_self_collision_flag self_flag,
+                                  plait_error *error)
+{
 	memset(scene, 0, sizeof *scene);
 	scene->kind = kind;
+	scene->self_flag = self_flag;
 	plait_world_def def = base != NULL ? *base : plait_default_world_def();
 	def.fps = 60.0f;
 	def.air_density = 0.0f;
