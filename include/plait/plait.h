@@ -222,9 +222,9 @@ typedef enum plait_bend_model {
 	PLAIT_BEND_DISTANCE,
 } plait_bend_model;
 
-/* Which of a cloth's own primitives collide with each other when it self-collides (seed 000
- * §4.5.1). Only PLAIT_SELF_COLLIDE_FULL_SURFACE promises that the cloth never passes through
- * itself; the others are cheaper and leave gaps that substeps and thickness must cover. */
+/* Which pairs of a self-colliding cloth's own primitives push each other at its self-collision
+ * thickness (seed 000 §4.5.1). Whatever the flag, the cloth does not pass through itself: the
+ * vertex-triangle and edge-edge pairs it leaves out are swept by the failsafe. */
 typedef enum plait_self_collision_flag {
 	PLAIT_SELF_COLLIDE_FULL_SURFACE = 0, /* vertex-triangle and edge-edge */
 	PLAIT_SELF_COLLIDE_VERTEX_FACE,      /* vertex-triangle only */
