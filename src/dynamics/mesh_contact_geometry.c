@@ -27,7 +27,7 @@ float plait_mesh_contacts_primitive_distance(int type, const vec3 *x)
 /* Cheap lower bounds of plait_mesh_contacts_primitive_distance (closest.h), less a rounding
  * allowance (scene units, well under every margin): most pairs the traversals meet are neighbours
  * in the cloth, about an edge apart, and these settle them without the closest points. */
-static float distance_lower_bound(int type, const vec3 *x)
+float plait_mesh_contacts_distance_lower_bound(int type, const vec3 *x)
 {
 	switch (type) {
 	case PAIR_VERTEX_FACE: {
@@ -94,7 +94,8 @@ float plait_mesh_contacts_largest_motion(int type, const vec3 *start, const vec3
 bool plait_mesh_contacts_paths_apart(int type, const vec3 *start, const vec3 *end, float distance)
 {
 	float motion = plait_mesh_contacts_largest_motion(type, start, end);
-	float quick = distance_lower_bound(type, start) + distance_lower_bound(type, end) - motion;
+	float quick = plait_mesh_contacts_distance_lower_bound(type, start) +
+	              plait_mesh_contacts_distance_lower_bound(type, end) - motion;
 	if (0.5f * quick > distance) {
 		return true;
 	}

@@ -309,6 +309,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 
 /* The distance between the pair's primitives at points x. */
 float plait_mesh_contacts_primitive_distance(int type, const vec3 *x);
+/* A cheap lower bound of it (projection gaps, less a rounding allowance). */
+float plait_mesh_contacts_distance_lower_bound(int type, const vec3 *x);
 /* Whether the primitives, moving on straight lines from start to end, come within distance of
  * each other (conservative: never a miss). */
 bool plait_mesh_contacts_paths_meet(int type, const vec3 *start, const vec3 *end, float distance);

@@ -185,8 +185,9 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		}
 		vec3 initial[4] = {{0}};
 		gather_points(p->x_start, v, n, initial);
-		float rest = plait_mesh_contacts_primitive_distance(type, initial);
-		if (rest >= distance) {
+		/* The cheap bound first: most pairs met are an edge apart. */
+		if (plait_mesh_contacts_distance_lower_bound(type, initial) >= distance ||
+		    plait_mesh_contacts_primitive_distance(type, initial) >= distance) {
 			pass->all_rest = false;
 			return;
 		}
