@@ -274,13 +274,10 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	return true;
 }
 
-static int compare_near_pairs(const void *a, const void *b)
+static int compare_near_elements(const void *a, const void *b)
 {
-	const near_pair *x = a, *y = b;
-	if (x->a != y->a) {
-		return x->a < y->a ? -1 : 1;
-	}
-	return x->b < y->b ? -1 : x->b > y->b;
+	const near_element *x = a, *y = b;
+	return x->element < y->element ? -1 : x->element > y->element;
 }
 
 /* The rest pairs and the element pairs that own them (the near lists) of every self-colliding
@@ -320,13 +317,38 @@ static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc)
 	    plait_alloc_zero(a, (size_t)(pass.near_count > 0 ? pass.near_count : 1), sizeof *mc->near_list);
 	bool ok = !pass.failed && mc->near_start != NULL && mc->near_list != NULL;
 	if (ok && pass.near_count > 0) {
-		qsort(pass.near, (size_t)pass.near_count, sizeof *pass.near, compare_near_pairs);
+		/* Bucketed by the lower element (a counting sort), then each element's few sorted by
+		 * the other: a sort of them all took most of a large cloth's set-up. */
 		for (int k = 0; k < pass.near_count; ++k) {
 			mc->near_start[pass.near[k].a + 1] += 1;
-			mc->near_list[k] = (near_element){pass.near[k].b, pass.near[k].rest_slots};
 		}
 		for (int e = 0; e < mc->element_count; ++e) {
 			mc->near_start[e + 1] += mc->near_start[e];
+		}
+		int *next = mc->near_start; /* filled, then shifted back below */
+		for (int k = 0; k < pass.near_count; ++k) {
+			mc->near_list[next[pass.near[k].a]++] = (near_element){pass.near[k].b, pass.near[k].rest_slots};
+		}
+		for (int e = mc->element_count; e > 0; --e) {
+			mc->near_start[e] = mc->near_start[e - 1];
+		}
+		mc->near_start[0] = 0;
+		for (int e = 0; e < mc->element_count; ++e) {
+			near_element *run = mc->near_list + mc->near_start[e];
+			int count = mc->near_start[e + 1] - mc->near_start[e];
+			if (count > 32) { /* a crumpled start can crowd an element */
+				qsort(run, (size_t)count, sizeof *run, compare_near_elements);
+				continue;
+			}
+			for (int i = 1; i < count; ++i) {
+				near_element x = run[i];
+				int j = i;
+				while (j > 0 && run[j - 1].element > x.element) {
+					run[j] = run[j - 1];
+					--j;
+				}
+				run[j] = x;
+			}
 		}
 	}
 	plait_free(a, pass.near);
