@@ -13,35 +13,36 @@ void plait_element_tree_destroy(plait_element_tree *tree, const plait_allocator 
 	memset(tree, 0, sizeof *tree);
 }
 
-/* Builds node `node` over order[first, first + count) and its subtree; returns the next free
- * node index and raises *depth to the subtree's depth. */
-static int build_node(plait_element_tree *tree, const vec3 *centre, int *scratch, int node, int first,
-                      int count, int next_free, int level, int *depth)
+/* Builds node `node` over the elements in [first, first + count) of the orders and its subtree;
+ * returns the next free node index and raises *depth to the subtree's depth. A leaf's elements
+ * go to tree->order in the order of its parent's axis (root: as given). */
+static int build_node(plait_element_tree *tree, const vec3 *centre, plait_axis_orders *orders, int node,
+                      int first, int count, int next_free, int level, int *depth, int parent_axis)
 {
 	plait_tree_node *n = &tree->nodes[node];
 	if (level > *depth) {
 		*depth = level;
 	}
 	if (count <= LEAF_SIZE) {
+		if (parent_axis >= 0) {
+			memcpy(tree->order + first, orders->by_axis[parent_axis] + first, sizeof(int) * (size_t)count);
+		}
 		n->first = first;
 		n->count = count;
 		return next_free;
 	}
-	vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
-	for (int k = first; k < first + count; ++k) {
-		lower = v3_min(lower, centre[tree->order[k]]);
-		upper = v3_max(upper, centre[tree->order[k]]);
-	}
+	vec3 lower, upper;
+	plait_axis_orders_bounds(orders, centre, first, count, &lower, &upper);
 	vec3 extent = v3_sub(upper, lower);
 	int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
-	plait_sort_by_axis(tree->order + first, count, centre, axis, scratch);
 	int left = next_free;
 	n->first = left;
 	n->count = 0;
 	int half = count / 2;
-	next_free = build_node(tree, centre, scratch, left, first, half, next_free + 2, level + 1, depth);
-	return build_node(tree, centre, scratch, left + 1, first + half, count - half, next_free, level + 1,
-	                  depth);
+	plait_axis_orders_split(orders, first, count, axis, half);
+	next_free = build_node(tree, centre, orders, left, first, half, next_free + 2, level + 1, depth, axis);
+	return build_node(tree, centre, orders, left + 1, first + half, count - half, next_free, level + 1, depth,
+	                  axis);
 }
 
 bool plait_element_tree_build(plait_element_tree *tree, const plait_allocator *allocator, const vec3 *centres,
@@ -54,9 +55,9 @@ bool plait_element_tree_build(plait_element_tree *tree, const plait_allocator *a
 	int capacity = 2 * count; /* a binary tree with leaves of at least one element */
 	tree->nodes = plait_alloc_zero(allocator, (size_t)capacity, sizeof *tree->nodes);
 	tree->order = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
-	int *scratch = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
-	if (tree->nodes == NULL || tree->order == NULL || scratch == NULL) {
-		plait_free(allocator, scratch);
+	plait_axis_orders orders;
+	if (tree->nodes == NULL || tree->order == NULL ||
+	    !plait_axis_orders_make(&orders, allocator, centres, count)) {
 		plait_element_tree_destroy(tree, allocator);
 		return false;
 	}
@@ -64,9 +65,9 @@ bool plait_element_tree_build(plait_element_tree *tree, const plait_allocator *a
 		tree->order[k] = k;
 	}
 	int depth = 0;
-	tree->node_count = build_node(tree, centres, scratch, 0, 0, count, 1, 0, &depth);
+	tree->node_count = build_node(tree, centres, &orders, 0, 0, count, 1, 0, &depth, -1);
 	tree->element_count = count;
-	plait_free(allocator, scratch);
+	plait_axis_orders_free(&orders, allocator);
 	return true;
 }
 

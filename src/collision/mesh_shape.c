@@ -34,37 +34,43 @@ static void triangle_bounds(const plait_mesh_shape *shape, int t, vec3 *lower, v
 }
 
 /* Builds the node at index `node` over order[first, first + count); returns the next free node. */
-static int build_node(plait_mesh_shape *shape, const vec3 *centroid, int *scratch, int node, int first,
-                      int count, int next_free)
+/* Node `node` over the triangles in [first, first + count) of the orders, and its subtree;
+ * returns the next free node index. A leaf's triangles go to triangle_order in the order of
+ * its parent's axis (root: as given). */
+static int build_node(plait_mesh_shape *shape, const vec3 *centroid, plait_axis_orders *orders, int node,
+                      int first, int count, int next_free, int parent_axis)
 {
 	plait_bvh_node *n = &shape->nodes[node];
 	vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
-	vec3 c_lower = lower, c_upper = upper;
 	for (int k = first; k < first + count; ++k) {
 		vec3 tl, tu;
-		triangle_bounds(shape, shape->triangle_order[k], &tl, &tu);
+		triangle_bounds(shape, orders->by_axis[0][k], &tl, &tu);
 		lower = v3_min(lower, tl);
 		upper = v3_max(upper, tu);
-		c_lower = v3_min(c_lower, centroid[shape->triangle_order[k]]);
-		c_upper = v3_max(c_upper, centroid[shape->triangle_order[k]]);
 	}
 	n->lower = lower;
 	n->upper = upper;
 	if (count <= LEAF_SIZE) {
+		if (parent_axis >= 0) {
+			memcpy(shape->triangle_order + first, orders->by_axis[parent_axis] + first,
+			       sizeof(int) * (size_t)count);
+		}
 		n->first = first;
 		n->count = count;
 		return next_free;
 	}
+	vec3 c_lower, c_upper;
+	plait_axis_orders_bounds(orders, centroid, first, count, &c_lower, &c_upper);
 	vec3 extent = v3_sub(c_upper, c_lower);
 	int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
-	plait_sort_by_axis(shape->triangle_order + first, count, centroid, axis, scratch);
 	int half = count / 2;
 	int left = next_free;
 	n->first = left;
 	n->count = 0;
 	next_free += 2;
-	next_free = build_node(shape, centroid, scratch, left, first, half, next_free);
-	return build_node(shape, centroid, scratch, left + 1, first + half, count - half, next_free);
+	plait_axis_orders_split(orders, first, count, axis, half);
+	next_free = build_node(shape, centroid, orders, left, first, half, next_free, axis);
+	return build_node(shape, centroid, orders, left + 1, first + half, count - half, next_free, axis);
 }
 
 plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocator *allocator,
@@ -107,11 +113,9 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
 	shape->nodes = plait_alloc_zero(allocator, (size_t)shape->node_count, sizeof *shape->nodes);
 	shape->triangle_order = plait_alloc(allocator, sizeof(int) * (size_t)triangles);
 	vec3 *centroid = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
-	int *scratch = plait_alloc(allocator, sizeof(int) * (size_t)triangles);
 	if (!shape->positions || !shape->triangles || !shape->normals || !shape->nodes ||
-	    !shape->triangle_order || !centroid || !scratch) {
+	    !shape->triangle_order || !centroid) {
 		plait_free(allocator, centroid);
-		plait_free(allocator, scratch);
 		plait_mesh_shape_destroy(shape, allocator);
 		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building a mesh collider");
 	}
@@ -130,10 +134,16 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
 		}
 		index += mesh->face_sizes[f];
 	}
-	int used = build_node(shape, centroid, scratch, 0, 0, triangles, 1);
+	plait_axis_orders orders;
+	if (!plait_axis_orders_make(&orders, allocator, centroid, triangles)) {
+		plait_free(allocator, centroid);
+		plait_mesh_shape_destroy(shape, allocator);
+		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building a mesh collider");
+	}
+	int used = build_node(shape, centroid, &orders, 0, 0, triangles, 1, -1);
 	shape->node_count = used;
+	plait_axis_orders_free(&orders, allocator);
 	plait_free(allocator, centroid);
-	plait_free(allocator, scratch);
 	shape->closed = plait_triangles_are_closed((const int(*)[3])shape->triangles, triangles, allocator);
 	if (shape->closed) {
 		double volume = 0.0;
