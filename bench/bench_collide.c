@@ -17,6 +17,7 @@
  *
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
  *                      [--self-flag full|vertex_face|vertex] (of the self-colliding cloths)
+ *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
@@ -57,7 +58,7 @@ typedef struct run_result {
 } run_result;
 
 static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose,
-                      plait_self_collision_flag self_flag)
+                      plait_self_collision_flag self_flag, float thickness_per_edge)
 {
 	run_result r = {0};
 	plait_world_def def = plait_default_world_def();
@@ -71,7 +72,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 #endif
 	collide_scene scene;
 	plait_error error;
-	if (!collide_scene_create_flagged(&scene, kind, n, &def, self_flag, &error)) {
+	if (!collide_scene_create_flagged(&scene, kind, n, &def, self_flag, thickness_per_edge, &error)) {
 		fprintf(stderr, "bench_collide: %s: %s\n", collide_scene_names[kind], error.message);
 		exit(1);
 	}
@@ -146,6 +147,7 @@ int main(int argc, char **argv)
 	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false;
 	int n = 0, frames = 0, runs = 1, threads = 1;
 	plait_self_collision_flag self_flag = plait_default_cloth_def().self_collision_flag;
+	float thickness_per_edge = 0.0f;
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
 			n = atoi(argv[++a]);
@@ -162,6 +164,8 @@ int main(int argc, char **argv)
 			self_flag = strcmp(argv[a], "vertex") == 0        ? PLAIT_SELF_COLLIDE_VERTEX
 			            : strcmp(argv[a], "vertex_face") == 0 ? PLAIT_SELF_COLLIDE_VERTEX_FACE
 			                                                  : PLAIT_SELF_COLLIDE_FULL_SURFACE;
+		} else if (strcmp(argv[a], "--thickness-per-edge") == 0 && a + 1 < argc) {
+			thickness_per_edge = (float)atof(argv[++a]);
 		} else if (strcmp(argv[a], "--verbose") == 0) {
 			verbose = true;
 		} else {
@@ -172,7 +176,8 @@ int main(int argc, char **argv)
 			if (k == SCENE_COUNT || runs < 1) {
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
-				        "[--no-check] [--self-flag full|vertex_face|vertex] [--verbose]\n"
+				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
+				        "[--verbose]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
@@ -187,7 +192,8 @@ int main(int argc, char **argv)
 		double *ms = malloc(sizeof(double) * (size_t)runs);
 		run_result last = {0};
 		for (int r = 0; r < runs; ++r) {
-			last = run((collide_scene_kind)k, n, frames, threads, check, verbose, self_flag);
+			last =
+			    run((collide_scene_kind)k, n, frames, threads, check, verbose, self_flag, thickness_per_edge);
 			ms[r] = last.ms;
 		}
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);

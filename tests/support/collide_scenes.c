@@ -304,7 +304,8 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		cloth.pins = pins;
 		cloth.pin_count = 2;
 		cloth.self_collide = true;
-		cloth.surface.thickness = 0.004f;
+		cloth.surface.thickness =
+		    scene->thickness_per_edge > 0.0f ? scene->thickness_per_edge * 2.0f / (float)(n - 1) : 0.004f;
 		ok = add_cloth(scene, &m, &cloth, error);
 		free(masses);
 		mesh_free(&m);
@@ -319,16 +320,17 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
                           plait_error *error)
 {
 	return collide_scene_create_flagged(scene, kind, n, base, plait_default_cloth_def().self_collision_flag,
-	                                    error);
+	                                    0.0f, error);
 }
 
 bool collide_scene_create_flagged(collide_scene *scene, collide_scene_kind kind, int n,
                                   const plait_world_def *base, plait_self_collision_flag self_flag,
-                                  plait_error *error)
+                                  float thickness_per_edge, plait_error *error)
 {
 	memset(scene, 0, sizeof *scene);
 	scene->kind = kind;
 	scene->self_flag = self_flag;
+	scene->thickness_per_edge = thickness_per_edge;
 	plait_world_def def = base != NULL ? *base : plait_default_world_def();
 	def.fps = 60.0f;
 	def.air_density = 0.0f;

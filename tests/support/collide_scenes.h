@@ -24,6 +24,7 @@ extern const char *const collide_scene_names[SCENE_COUNT];
 typedef struct collide_scene {
 	collide_scene_kind kind;
 	plait_self_collision_flag self_flag; /* of every self-colliding cloth */
+	float thickness_per_edge;            /* hang-self: the cloth's thickness over its edge (0: 4 mm) */
 	plait_world_id world;
 	plait_object_id cloths[COLLIDE_SCENE_MAX_CLOTHS]; /* lowest first where they are stacked */
 	int cloth_count;
@@ -37,10 +38,12 @@ typedef struct collide_scene {
  * be NULL (defaults of the scene) or carries thread hooks and the like. */
 bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, const plait_world_def *base,
                           plait_error *error);
-/* As collide_scene_create, with the self-colliding cloths' self-collision flag. */
+/* As collide_scene_create, with the self-colliding cloths' self-collision flag, and for
+ * hang-self a thickness in proportion to the cloth's edge (thickness_per_edge > 0; 0: 4 mm at
+ * any resolution). */
 bool collide_scene_create_flagged(collide_scene *scene, collide_scene_kind kind, int n,
                                   const plait_world_def *base, plait_self_collision_flag self_flag,
-                                  plait_error *error);
+                                  float thickness_per_edge, plait_error *error);
 /* Moves the animated collider to its place at the end of the next frame, then steps. */
 plait_result collide_scene_step(collide_scene *scene, plait_error *error);
 void collide_scene_destroy(collide_scene *scene);
