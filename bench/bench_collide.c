@@ -18,6 +18,7 @@
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
  *                      [--self-flag full|vertex_face|vertex] (of the self-colliding cloths)
  *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
+ *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
@@ -58,7 +59,7 @@ typedef struct run_result {
 } run_result;
 
 static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose,
-                      plait_self_collision_flag self_flag, float thickness_per_edge)
+                      const collide_scene_options *options)
 {
 	run_result r = {0};
 	plait_world_def def = plait_default_world_def();
@@ -72,7 +73,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 #endif
 	collide_scene scene;
 	plait_error error;
-	if (!collide_scene_create_flagged(&scene, kind, n, &def, self_flag, thickness_per_edge, &error)) {
+	if (!collide_scene_create_with(&scene, kind, n, &def, options, &error)) {
 		fprintf(stderr, "bench_collide: %s: %s\n", collide_scene_names[kind], error.message);
 		exit(1);
 	}
@@ -146,8 +147,7 @@ int main(int argc, char **argv)
 {
 	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false;
 	int n = 0, frames = 0, runs = 1, threads = 1;
-	plait_self_collision_flag self_flag = plait_default_cloth_def().self_collision_flag;
-	float thickness_per_edge = 0.0f;
+	collide_scene_options options = collide_scene_default_options();
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
 			n = atoi(argv[++a]);
@@ -161,11 +161,13 @@ int main(int argc, char **argv)
 			check = false;
 		} else if (strcmp(argv[a], "--self-flag") == 0 && a + 1 < argc) {
 			++a;
-			self_flag = strcmp(argv[a], "vertex") == 0        ? PLAIT_SELF_COLLIDE_VERTEX
-			            : strcmp(argv[a], "vertex_face") == 0 ? PLAIT_SELF_COLLIDE_VERTEX_FACE
-			                                                  : PLAIT_SELF_COLLIDE_FULL_SURFACE;
+			options.self_flag = strcmp(argv[a], "vertex") == 0        ? PLAIT_SELF_COLLIDE_VERTEX
+			                    : strcmp(argv[a], "vertex_face") == 0 ? PLAIT_SELF_COLLIDE_VERTEX_FACE
+			                                                          : PLAIT_SELF_COLLIDE_FULL_SURFACE;
 		} else if (strcmp(argv[a], "--thickness-per-edge") == 0 && a + 1 < argc) {
-			thickness_per_edge = (float)atof(argv[++a]);
+			options.thickness_per_edge = (float)atof(argv[++a]);
+		} else if (strcmp(argv[a], "--stiff") == 0) {
+			options.stiff = true;
 		} else if (strcmp(argv[a], "--verbose") == 0) {
 			verbose = true;
 		} else {
@@ -177,7 +179,7 @@ int main(int argc, char **argv)
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
 				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--verbose]\n"
+				        "[--stiff] [--verbose]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
@@ -192,8 +194,7 @@ int main(int argc, char **argv)
 		double *ms = malloc(sizeof(double) * (size_t)runs);
 		run_result last = {0};
 		for (int r = 0; r < runs; ++r) {
-			last =
-			    run((collide_scene_kind)k, n, frames, threads, check, verbose, self_flag, thickness_per_edge);
+			last = run((collide_scene_kind)k, n, frames, threads, check, verbose, &options);
 			ms[r] = last.ms;
 		}
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);

@@ -26,7 +26,9 @@ static scene_totals run_flagged_scene(collide_scene_kind kind, int n, int frames
 {
 	collide_scene scene;
 	plait_error error;
-	cr_assert(collide_scene_create_flagged(&scene, kind, n, NULL, flag, 0.0f, &error), "%s: %s",
+	collide_scene_options options = collide_scene_default_options();
+	options.self_flag = flag;
+	cr_assert(collide_scene_create_with(&scene, kind, n, NULL, &options, &error), "%s: %s",
 	          collide_scene_names[kind], error.message);
 	scene_totals totals = {0};
 	int count = frames > 0 ? frames : scene.frames;

@@ -304,6 +304,13 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		cloth.pins = pins;
 		cloth.pin_count = 2;
 		cloth.self_collide = true;
+		if (scene->stiff) {
+			cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+			cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
+			cloth.bend_model = PLAIT_BEND_DISTANCE;
+			cloth.iterations = cloth.shear_iterations = cloth.bend_iterations = 6;
+			cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
+		}
 		cloth.surface.thickness =
 		    scene->thickness_per_edge > 0.0f ? scene->thickness_per_edge * 2.0f / (float)(n - 1) : 0.004f;
 		ok = add_cloth(scene, &m, &cloth, error);
@@ -319,19 +326,28 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, const plait_world_def *base,
                           plait_error *error)
 {
-	return collide_scene_create_flagged(scene, kind, n, base, plait_default_cloth_def().self_collision_flag,
-	                                    0.0f, error);
+	collide_scene_options options = collide_scene_default_options();
+	return collide_scene_create_with(scene, kind, n, base, &options, error);
 }
 
-bool collide_scene_create_flagged(collide_scene *scene, collide_scene_kind kind, int n,
-                                  const plait_world_def *base, plait_self_collision_flag self_flag,
-                                  float thickness_per_edge, plait_error *error)
+collide_scene_options collide_scene_default_options(void)
+{
+	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false};
+}
+
+bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,
+                               const plait_world_def *base, const collide_scene_options *options,
+                               plait_error *error)
 {
 	memset(scene, 0, sizeof *scene);
 	scene->kind = kind;
-	scene->self_flag = self_flag;
-	scene->thickness_per_edge = thickness_per_edge;
+	scene->self_flag = options->self_flag;
+	scene->thickness_per_edge = options->thickness_per_edge;
+	scene->stiff = options->stiff;
 	plait_world_def def = base != NULL ? *base : plait_default_world_def();
+	if (kind == SCENE_HANG_SELF && scene->stiff) {
+		def.substeps = 6;
+	}
 	def.fps = 60.0f;
 	def.air_density = 0.0f;
 	scene->fps = def.fps;
