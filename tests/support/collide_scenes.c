@@ -169,7 +169,7 @@ static plait_object_id add_sphere(collide_scene *scene, float r, plait_vec3 cent
 static bool build(collide_scene *scene, int n, plait_error *error)
 {
 	plait_cloth_def cloth = plait_default_cloth_def();
-	cloth.self_collision_flag = scene->self_flag;
+	cloth.self_collision_flag = scene->options.self_flag;
 	cloth.surface.thickness = 0.01f;
 	cloth.surface.friction = 0.3f;
 	switch (scene->kind) {
@@ -304,15 +304,16 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		cloth.pins = pins;
 		cloth.pin_count = 2;
 		cloth.self_collide = true;
-		if (scene->stiff) {
+		if (scene->options.stiff) {
 			cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
 			cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
 			cloth.bend_model = PLAIT_BEND_DISTANCE;
 			cloth.iterations = cloth.shear_iterations = cloth.bend_iterations = 6;
 			cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
 		}
-		cloth.surface.thickness =
-		    scene->thickness_per_edge > 0.0f ? scene->thickness_per_edge * 2.0f / (float)(n - 1) : 0.004f;
+		cloth.surface.thickness = scene->options.thickness_per_edge > 0.0f
+		                              ? scene->options.thickness_per_edge * 2.0f / (float)(n - 1)
+		                              : 0.004f;
 		ok = add_cloth(scene, &m, &cloth, error);
 		free(masses);
 		mesh_free(&m);
@@ -341,11 +342,9 @@ bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, in
 {
 	memset(scene, 0, sizeof *scene);
 	scene->kind = kind;
-	scene->self_flag = options->self_flag;
-	scene->thickness_per_edge = options->thickness_per_edge;
-	scene->stiff = options->stiff;
+	scene->options = *options;
 	plait_world_def def = base != NULL ? *base : plait_default_world_def();
-	if (kind == SCENE_HANG_SELF && scene->stiff) {
+	if (kind == SCENE_HANG_SELF && options->stiff) {
 		def.substeps = 6;
 	}
 	def.fps = 60.0f;

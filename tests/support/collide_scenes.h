@@ -21,11 +21,20 @@ extern const char *const collide_scene_names[SCENE_COUNT];
 
 #define COLLIDE_SCENE_MAX_CLOTHS 4
 
+/* Variations of the scenes for benchmarks and tests. */
+typedef struct collide_scene_options {
+	plait_self_collision_flag self_flag; /* of every self-colliding cloth */
+	/* hang-self: the thickness a share of the cloth's edge (> 0), not 4 mm at any resolution */
+	float thickness_per_edge;
+	/* hang-self: the constraints of issue 4's comparison (structural, shear and skip-one edges,
+	 * all rigid, 6 substeps of one sweep each, Euclidean tethers), not the default resistances,
+	 * under which 1 kg a vertex stretches the edges at the pins a thousandfold */
+	bool stiff;
+} collide_scene_options;
+
 typedef struct collide_scene {
 	collide_scene_kind kind;
-	plait_self_collision_flag self_flag; /* of every self-colliding cloth */
-	float thickness_per_edge;            /* hang-self: the cloth's thickness over its edge (0: 4 mm) */
-	bool stiff;                          /* hang-self: issue 4's stiff constraints and tethers */
+	collide_scene_options options;
 	plait_world_id world;
 	plait_object_id cloths[COLLIDE_SCENE_MAX_CLOTHS]; /* lowest first where they are stacked */
 	int cloth_count;
@@ -39,16 +48,6 @@ typedef struct collide_scene {
  * be NULL (defaults of the scene) or carries thread hooks and the like. */
 bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, const plait_world_def *base,
                           plait_error *error);
-/* Variations of the scenes for benchmarks and tests. */
-typedef struct collide_scene_options {
-	plait_self_collision_flag self_flag; /* of every self-colliding cloth */
-	/* hang-self: the thickness a share of the cloth's edge (> 0), not 4 mm at any resolution */
-	float thickness_per_edge;
-	/* hang-self: the constraints of issue 4's comparison (structural, shear and skip-one edges,
-	 * all rigid, 6 substeps of one sweep each, Euclidean tethers), not the default resistances,
-	 * under which 1 kg a vertex stretches the edges at the pins a thousandfold */
-	bool stiff;
-} collide_scene_options;
 
 /* The default options: every scene as collide_scene_create makes it. */
 collide_scene_options collide_scene_default_options(void);
