@@ -47,6 +47,28 @@ float plait_closest_segments(vec3 p1, vec3 q1, vec3 p2, vec3 q2, float *s, float
 	return v3_length_sq(v3_sub(c1, c2));
 }
 
+bool plait_closest_segments_inside(vec3 p1, vec3 q1, vec3 p2, vec3 q2)
+{
+	/* plait_closest_segments's arithmetic, step for step, to its first clamp. */
+	vec3 d1 = v3_sub(q1, p1), d2 = v3_sub(q2, p2), r = v3_sub(p1, p2);
+	float a = v3_length_sq(d1), e = v3_length_sq(d2), f = v3_dot(d2, r);
+	float tiny = 1e-20f;
+	if (a <= tiny || e <= tiny) {
+		return false;
+	}
+	float c = v3_dot(d1, r), b = v3_dot(d1, d2);
+	float denominator = a * e - b * b;
+	if (!(denominator > 1e-12f * a * e)) {
+		return false;
+	}
+	float s = clamp01((b * f - c * e) / denominator);
+	if (s <= 0.0f || s >= 1.0f) {
+		return false;
+	}
+	float t = (b * s + f) / e;
+	return t > 0.0f && t < 1.0f;
+}
+
 float plait_segments_gap(vec3 p, vec3 q, vec3 r, vec3 s)
 {
 	vec3 d = v3_sub(v3_add(r, s), v3_add(p, q)); /* twice the line between the midpoints */

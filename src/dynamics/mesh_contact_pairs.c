@@ -151,9 +151,87 @@ static void start_side(contact_pair *pair, const vec3 *start, const vec3 *end)
 	}
 }
 
-/* A primitive pair met by the traversal: in the failsafe it is swept; in the gather stage it is
- * listed when its paths may come within its list distance: as a contact, or (pairs that only
- * the failsafe watches) as a pair to sweep at the end of the substep. */
+/* Whether a re-listing around strayed vertices lists the pair: it has one of them (the others
+ * are listed or left out as the gather left them, and still so). */
+static bool relisted(const pair_pass *pass, const int *v, int n)
+{
+	uint8_t any = 0;
+	for (int k = 0; k < n; ++k) {
+		any |= pass->mc->around[v[k]];
+	}
+	return any != 0;
+}
+
+/* The gather's listing of a primitive pair `now` apart (end: its points now), within its list
+ * distance: as a contact, or (pairs that only the failsafe watches: the self-collision flag's
+ * others, and edges closest at an end) as a pair to sweep at the end of the substep. Edge
+ * pairs come with their closest points' parameters. */
+static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, float now, float edge_s,
+                      float edge_t, const plait_material *first, const plait_material *second, bool self)
+{
+	/* Edges whose closest points are an end of either are in reach of a vertex-face pair of
+	 * the triangles round that end: only the failsafe watches them. */
+	bool pushes = !self || self_pushes(first, type);
+	bool at_end =
+	    type == PAIR_EDGE_EDGE && (edge_s <= 0.0f || edge_s >= 1.0f || edge_t <= 0.0f || edge_t >= 1.0f);
+	/* While the list covers, the pair's vertices stay within their guards (and its objects
+	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
+	 * bound). A pair only the failsafe watches that stays farther apart than the failsafe's
+	 * distance would never be swept (sweep_listed): it is left out, before any more work. */
+	float lower = now - pass->pair_slack;
+	if ((!pushes || at_end) && lower > FAILSAFE_DISTANCE) {
+		return;
+	}
+	plait_sim *sim = pass->sim;
+	plait_particles *p = &sim->particles;
+	int n = pair_size[type];
+	int first_count = type == PAIR_EDGE_EDGE ? 2 : 1;
+	float distance = 0.0f;
+	if (pushes) {
+		distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
+		if (self) {
+			distance *= first->self_width_scale;
+		}
+	}
+	/* Rest pairs (the failsafe watches them: mc->rest_pairs) never get here: the walk passes
+	 * over their slots (rest_slots). */
+	vec3 start[4] = {{0}};
+	gather_points(p->x_prev, v, n, start);
+	contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
+	                     (uint8_t)type,
+	                     (uint8_t)self,
+	                     distance,
+	                     plait_combined_friction(first->friction, second->friction),
+	                     1.0f,
+	                     {0.0f, 1.0f, 0.0f},
+	                     {1.0f, 1.0f},
+	                     -1.0f};
+	/* The thickness between two primitives never exceeds their separation at the start frame
+	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
+	 * one object such pairs are rest pairs.) */
+	if (distance > 0.0f && !self) {
+		vec3 initial[4];
+		gather_points(p->x_start, v, n, initial);
+		pair.distance = plait_minf(distance, plait_mesh_contacts_primitive_distance(type, initial));
+	}
+	if (at_end) {
+		pair.distance = 0.0f;
+	}
+	pair.lower = lower;
+	if (pair.distance <= 0.0f && pair.lower > FAILSAFE_DISTANCE) {
+		return;
+	}
+	if (first->collision_layer != second->collision_layer) {
+		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
+	}
+	start_side(&pair, start, end);
+	(void)add_pair(pass, &pair);
+}
+
+/* A primitive pair met by the traversal: in the failsafe it is swept; at the rest stage it is
+ * kept when nearer than its contact distance at the start; in the gather, the pairs of curves
+ * and points (vertex-edge, vertex-vertex) are listed from here, box first (the walk lists the
+ * others itself: list_face, list_edges). */
 static void visit_primitives(pair_pass *pass, int type, const int *v, const plait_material *first,
                              const plait_material *second, bool self)
 {
@@ -161,14 +239,8 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	if (shares_vertex(v, n)) {
 		return;
 	}
-	if (pass->around_only) {
-		uint8_t any = 0;
-		for (int k = 0; k < n; ++k) {
-			any |= pass->mc->around[v[k]];
-		}
-		if (!any) {
-			return; /* listed or left out at the gather, and still so */
-		}
+	if (pass->around_only && !relisted(pass, v, n)) {
+		return;
 	}
 	if (pass->stage == STAGE_FAILSAFE) {
 		plait_mesh_contacts_sweep_pair(pass, type, v);
@@ -209,12 +281,9 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		}
 		return;
 	}
-	/* A pair the self-collision flag leaves to the failsafe is listed only when it may cross
-	 * while the list serves (see the end). */
 	bool pushes = !self || self_pushes(first, type);
 	float list_distance = pushes ? pass->list_distance : pass->failsafe_reach;
-	float now = 0.0f;
-	vec3 start[4] = {{0}}, end[4] = {{0}};
+	vec3 end[4] = {{0}};
 	gather_current(p->point, v, n, end);
 	/* Boxes first: most pairs of neighbouring elements are rejected without a distance. */
 	vec3 lower_a = end[0], upper_a = end[0], lower_b = end[first_count], upper_b = end[first_count];
@@ -232,61 +301,11 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	    lower_a.z - upper_b.z > list_distance || lower_b.z - upper_a.z > list_distance) {
 		return;
 	}
-	/* Edges: the closest points' parameters too, for the test of their ends below (as
-	 * plait_mesh_contacts_primitive_distance computes it). */
-	float edge_s = 0.0f, edge_t = 0.0f;
-	now = type == PAIR_EDGE_EDGE
-	          ? sqrtf(plait_closest_segments(end[0], end[1], end[2], end[3], &edge_s, &edge_t))
-	          : plait_mesh_contacts_primitive_distance(type, end);
+	float now = plait_mesh_contacts_primitive_distance(type, end);
 	if (now > list_distance) {
 		return;
 	}
-	float distance = 0.0f;
-	if (pushes) {
-		distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
-		if (self) {
-			distance *= first->self_width_scale;
-		}
-	}
-	/* Rest pairs (the failsafe watches them: mc->rest_pairs) never get here: the walk passes
-	 * over their slots (rest_slots). */
-	gather_points(p->x_prev, v, n, start);
-	contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
-	                     (uint8_t)type,
-	                     (uint8_t)self,
-	                     distance,
-	                     plait_combined_friction(first->friction, second->friction),
-	                     1.0f,
-	                     {0.0f, 1.0f, 0.0f},
-	                     {1.0f, 1.0f},
-	                     -1.0f};
-	/* The thickness between two primitives never exceeds their separation at the start frame
-	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
-	 * one object such pairs are rest pairs.) */
-	if (distance > 0.0f && !self) {
-		vec3 initial[4];
-		gather_points(p->x_start, v, n, initial);
-		pair.distance = plait_minf(distance, plait_mesh_contacts_primitive_distance(type, initial));
-	}
-	/* Edges whose closest points are an end of either are in reach of a vertex-face pair of
-	 * the triangles round that end: only the failsafe watches them. */
-	if (type == PAIR_EDGE_EDGE && pair.distance > 0.0f &&
-	    (edge_s <= 0.0f || edge_s >= 1.0f || edge_t <= 0.0f || edge_t >= 1.0f)) {
-		pair.distance = 0.0f;
-	}
-	/* While the list covers, the pair's vertices stay within their guards (and its objects
-	 * within their allowance) of here, so its paths stay this far apart (the failsafe's
-	 * bound). A pair only the failsafe watches that stays farther apart than the failsafe's
-	 * distance would never be swept (sweep_listed): it is left out. */
-	pair.lower = now - pass->pair_slack;
-	if (pair.distance <= 0.0f && pair.lower > FAILSAFE_DISTANCE) {
-		return;
-	}
-	if (first->collision_layer != second->collision_layer) {
-		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
-	}
-	start_side(&pair, start, end);
-	(void)add_pair(pass, &pair);
+	list_pair(pass, type, v, end, now, 0.0f, 0.0f, first, second, self);
 }
 
 /* Whether boxes [la, ua] and [lb, ub] are farther apart than `gap` along an axis. */
@@ -313,6 +332,46 @@ static bool segments_far(vec3 p, vec3 q, vec3 r, vec3 s, float gap)
 {
 	return boxes_apart(v3_min(p, q), v3_max(p, q), v3_min(r, s), v3_max(r, s), gap) ||
 	       plait_segments_gap(p, q, r, s) - REJECT_SLACK > gap;
+}
+
+/* The gather's test of vertex v[0] at x against triangle v[1..3] at t, the walk's cheap
+ * rejections passed: their distance now, then list_pair. */
+static void list_face(pair_pass *pass, const int *v, vec3 x, const vec3 *t, const plait_material *first,
+                      const plait_material *second, bool self)
+{
+	if (pass->around_only && !relisted(pass, v, 4)) {
+		return;
+	}
+	bool pushes = !self || self_pushes(first, PAIR_VERTEX_FACE);
+	vec3 end[4] = {x, t[0], t[1], t[2]};
+	float now = plait_mesh_contacts_primitive_distance(PAIR_VERTEX_FACE, end);
+	if (now > (pushes ? pass->list_distance : pass->failsafe_reach)) {
+		return;
+	}
+	list_pair(pass, PAIR_VERTEX_FACE, v, end, now, 0.0f, 0.0f, first, second, self);
+}
+
+/* The gather's test of edges v[0]-v[1] (p-q) and v[2]-v[3] (r-s), the walk's cheap rejections
+ * passed. Edges closest at an end of either are only watched (list_pair), within the
+ * failsafe's reach: those farther off are left out before their closest points. */
+static void list_edges(pair_pass *pass, const int *v, vec3 p, vec3 q, vec3 r, vec3 s,
+                       const plait_material *first, const plait_material *second, bool self)
+{
+	if (pass->around_only && !relisted(pass, v, 4)) {
+		return;
+	}
+	bool pushes = !self || self_pushes(first, PAIR_EDGE_EDGE);
+	if (boxes_apart(v3_min(p, q), v3_max(p, q), v3_min(r, s), v3_max(r, s), pass->failsafe_reach) &&
+	    !(pushes && plait_closest_segments_inside(p, q, r, s))) {
+		return;
+	}
+	float edge_s, edge_t;
+	float now = sqrtf(plait_closest_segments(p, q, r, s, &edge_s, &edge_t));
+	if (now > (pushes ? pass->list_distance : pass->failsafe_reach)) {
+		return;
+	}
+	vec3 end[4] = {p, q, r, s};
+	list_pair(pass, PAIR_EDGE_EDGE, v, end, now, edge_s, edge_t, first, second, self);
 }
 
 /* Whether a vertex of material mv meets a triangle of material mo here. A collider's faces
@@ -410,7 +469,11 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 				v[1] = other->v[0];
 				v[2] = other->v[1];
 				v[3] = other->v[2];
-				visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
+				if (cull) {
+					list_face(pass, v, vx[k], ox, mv, mo, self);
+				} else {
+					visit_primitives(pass, PAIR_VERTEX_FACE, v, mv, mo, self);
+				}
 			}
 			if (to_edge && !far) {
 				v[1] = other->v[0];
@@ -457,9 +520,106 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 				v[1] = ea->v[i1];
 				v[2] = eb->v[j];
 				v[3] = eb->v[j1];
-				visit_primitives(pass, PAIR_EDGE_EDGE, v, ma, mb, self);
+				if (cull) {
+					list_edges(pass, v, x[0][i], x[0][i1], x[1][j], x[1][j1], ma, mb, self);
+				} else {
+					visit_primitives(pass, PAIR_EDGE_EDGE, v, ma, mb, self);
+				}
 			}
 		}
+	}
+}
+
+/* The edge pairs (bit 3i + j: edge i of one triangle, edge j of the other) with an end in
+ * common, from which vertices are one (bit 3k + m: vertex k of the one is vertex m of the
+ * other). Edge i joins vertices i and i + 1. */
+static unsigned edge_pairs_touching(unsigned same)
+{
+	unsigned touching = 0u;
+	for (int k = 0; k < 3; ++k) {
+		for (int m = 0; m < 3; ++m) {
+			if (same & (1u << (3 * k + m))) {
+				unsigned edges_k = (1u << k) | (1u << ((k + 2) % 3)),
+				         edges_m = (1u << m) | (1u << ((m + 2) % 3));
+				for (int i = 0; i < 3; ++i) {
+					touching |= (edges_k & (1u << i)) ? edges_m << (3 * i) : 0u;
+				}
+			}
+		}
+	}
+	return touching;
+}
+
+/* walk_element_pair for the gather's most common case, two triangles of one cloth whose
+ * self-collision flag pushes no vertex-vertex pairs: which primitive pairs to test is decided
+ * in bit masks (ownership, shared vertices, rest slots), then only those are tested, in the
+ * walk's order (so the same list). */
+static void gather_triangle_pair(pair_pass *pass, int a, int b, const plait_material *m)
+{
+	const plait_mesh_contacts *mc = pass->mc;
+	const element *ea = &mc->elements[a], *eb = &mc->elements[b];
+	const plait_point *point = pass->sim->particles.point;
+	uint32_t skip = pass->rest_slots;
+	unsigned same = 0u;
+	for (int k = 0; k < 3; ++k) {
+		for (int mm = 0; mm < 3; ++mm) {
+			same |= (unsigned)(ea->v[k] == eb->v[mm]) << (3 * k + mm);
+		}
+	}
+	unsigned shared_a = (unsigned)((same & 0007u) != 0) | (unsigned)((same & 0070u) != 0) << 1 |
+	                    (unsigned)((same & 0700u) != 0) << 2;
+	unsigned shared_b = (unsigned)((same & 0111u) != 0) | (unsigned)((same & 0222u) != 0) << 1 |
+	                    (unsigned)((same & 0444u) != 0) << 2;
+	unsigned faces_a = ea->own_vertices & ~shared_a & ~skip & 7u;
+	unsigned faces_b = eb->own_vertices & ~shared_b & ~(skip >> 3) & 7u;
+	unsigned edges = 0u;
+	for (int i = 0; i < 3; ++i) {
+		edges |= (ea->own_edges & (1u << i)) ? (unsigned)(eb->own_edges & 7u) << (3 * i) : 0u;
+	}
+	edges &= ~(skip >> 15) & 0777u;
+	if (same != 0u) {
+		edges &= ~edge_pairs_touching(same);
+	}
+	if ((faces_a | faces_b | edges) == 0u) {
+		return;
+	}
+	vec3 x[2][3];
+	for (int k = 0; k < 3; ++k) {
+		x[0][k] = point[ea->v[k]].x;
+		x[1][k] = point[eb->v[k]].x;
+	}
+	float gap = pass->list_distance;
+	bool face_pushes = self_pushes(m, PAIR_VERTEX_FACE);
+	float edge_gap = self_pushes(m, PAIR_EDGE_EDGE) ? gap : pass->failsafe_reach;
+	int v[4];
+	for (int turn = 0; turn < 2; ++turn) {
+		const element *vertex_side = turn == 0 ? ea : eb, *other = turn == 0 ? eb : ea;
+		const element_shape *os = &mc->shapes[turn == 0 ? b : a];
+		const vec3 *vx = x[turn], *ox = x[1 - turn];
+		for (unsigned bits = turn == 0 ? faces_a : faces_b; bits != 0u; bits &= bits - 1u) {
+			int k = __builtin_ctz(bits);
+			if (point_far(vx[k], other, os, ox, gap) ||
+			    (!face_pushes && point_far(vx[k], other, os, ox, pass->failsafe_reach))) {
+				continue;
+			}
+			v[0] = vertex_side->v[k];
+			v[1] = other->v[0];
+			v[2] = other->v[1];
+			v[3] = other->v[2];
+			list_face(pass, v, vx[k], ox, m, m, true);
+		}
+	}
+	for (unsigned bits = edges; bits != 0u; bits &= bits - 1u) {
+		int slot = __builtin_ctz(bits), i = slot / 3, j = slot % 3;
+		int i1 = i < 2 ? i + 1 : 0, j1 = j < 2 ? j + 1 : 0;
+		if (segments_far(x[0][i], x[0][i1], x[1][j], x[1][j1], edge_gap)) {
+			continue;
+		}
+		v[0] = ea->v[i];
+		v[1] = ea->v[i1];
+		v[2] = eb->v[j];
+		v[3] = eb->v[j1];
+		list_edges(pass, v, x[0][i], x[0][i1], x[1][j], x[1][j1], m, m, true);
 	}
 }
 
@@ -491,6 +651,11 @@ static void visit_elements(int a, int b, void *context)
 		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
 		                      pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
 		pass->failsafe_reach = pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
+	}
+	if (pass->stage == STAGE_GATHER && ma == mb && ea->size == 3 && eb->size == 3 &&
+	    !self_pushes(ma, PAIR_VERTEX_VERTEX) && ma->type != PLAIT_OBJECT_COLLIDER) {
+		gather_triangle_pair(pass, a, b, ma);
+		return;
 	}
 	walk_element_pair(pass, a, b, ma, mb, self);
 	if (pass->stage == STAGE_REST && (pass->all_rest || pass->rest_slots != 0) && !pass->failed) {
