@@ -307,3 +307,35 @@ Test(physics, head_on_collision_conserves_momentum_and_bounces_as_asked)
 	cr_assert_float_eq(v1, -0.25, 0.0025, "v1 = %g", v1);
 	cr_assert_float_eq(v2, -0.25, 0.0025, "v2 = %g", v2);
 }
+
+/* A particle resting against the underside of a 1 mm box, a rounding inside the thickness, shot
+ * up through it within one substep: it began outside the box itself, so it stays on the side
+ * it began on (the trapped rule pushes a particle out along the normal where it ends, which
+ * past a thin box is the far side). */
+Test(physics, a_particle_within_the_thickness_under_a_thin_box_does_not_pass_through_it)
+{
+	plait_world_id world = make_world(4, 60.0f);
+	plait_collider_def box = plait_default_collider_def();
+	box.shape = PLAIT_SHAPE_BOX;
+	box.size = (plait_vec3){0.6f, 0.001f, 0.6f};
+	plait_error error;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &box, &error)), "%s", error.message);
+	const float radius = 0.01f;
+	float starts[2] = {-0.0005f - 0.999f * radius, -0.0005f - 1.001f * radius}; /* inside, outside */
+	for (int k = 0; k < 2; ++k) {
+		plait_object_id p = add_particle(world, (plait_vec3){0.1f * (float)k, starts[k], 0.0f},
+		                                 (plait_vec3){0.0f, 20.0f, 0.0f}, 1.0f, radius);
+		(void)p;
+	}
+	for (int frame = 1; frame <= 30; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		for (int k = 0; k < 2; ++k) {
+			plait_vec3 x;
+			cr_assert_eq(plait_object_get_positions(plait_world_get_object(world, k + 1), 0, 1, &x, NULL),
+			             PLAIT_OK);
+			cr_assert_lt(x.y, -0.0005f, "frame %d: the particle that began %s the thickness is at y = %g m",
+			             frame, k == 0 ? "inside" : "outside", (double)x.y);
+		}
+	}
+	plait_destroy_world(world);
+}

@@ -603,10 +603,18 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 	vec3 normal;
 	float distance = plait_shape_distance(&c->shape, hit, &normal);
 	if (toi == 0.0f && distance < radius) {
-		/* Started inside the thickened shape (trapped): push out along the normal at the end
-		 * position instead, which for the convex shapes here leads straight out. */
-		distance = plait_shape_distance(&c->shape, p1, &normal);
-		hit = p1;
+		/* Started inside the thickened shape. Inside the shape itself (trapped): push out along
+		 * the normal at the end position instead, which for the convex shapes here leads
+		 * straight out. Only within the thickness (resting on it, a rounding inside): out the
+		 * way it came, unless the end lies past the shape on another side (through a thin box),
+		 * when it goes back to the side it began on. */
+		vec3 end_normal;
+		float end_distance = plait_shape_distance(&c->shape, p1, &end_normal);
+		if (!(distance > 0.0f) || v3_dot(end_normal, normal) >= 0.0f) {
+			distance = end_distance;
+			normal = end_normal;
+			hit = p1;
+		}
 	}
 	vec3 surface = v3_mul_add(hit, -distance, normal);
 	float depth = radius - v3_dot(v3_sub(p1, surface), normal);
