@@ -129,10 +129,18 @@ Test(collide, a_sheet_on_a_spinning_sphere_twists_for_ten_seconds_without_crossi
 	collide_scene_destroy(&scene);
 }
 
+/* At 14 the tube, squeezed in the elbow, needs the failsafe's zones: the arm's triangle
+ * pushes after them move vertices of no zone, which must be swept again (a crossing stayed
+ * from frame 137 on when they were not). */
 Test(collide, a_tube_over_a_bending_arm_never_crosses_itself_or_the_arm)
 {
-	scene_totals t = run_scene(SCENE_ARM, 16, 0, NULL);
-	expect_clean(&t, "arm");
+	int sizes[2] = {14, 16};
+	for (int k = 0; k < 2; ++k) {
+		scene_totals t = run_scene(SCENE_ARM, sizes[k], 0, NULL);
+		char name[32];
+		snprintf(name, sizeof name, "arm at %d", sizes[k]);
+		expect_clean(&t, name);
+	}
 }
 
 Test(collide, hang_over_a_sphere_mesh_with_self_collision)

@@ -762,6 +762,11 @@ static bool push_triangle_out(const collider_job *job, plait_particles *p, const
 	float lambda = depth * r->scale / weighted;
 	for (int m = 0; m < 3; ++m) {
 		p->point[v[m]].x = v3_mul_add(p->point[v[m]].x, lambda * w[m] * p->point[v[m]].w, normal);
+		/* A pass for listed particles reports the others it moved (by adding them). */
+		if (job->listed != NULL && job->listed[v[m]] < 0 && p->point[v[m]].w > 0.0f) {
+			job->listed[v[m]] = v[m];
+			job->grown_indices[(*job->grown_count)++] = v[m];
+		}
 	}
 	return true;
 }
@@ -861,16 +866,22 @@ static void prepare_collider_job(plait_sim *sim, const plait_collider *c, const 
 			identity = identity && r->rotation.m[row][column] == (row == column ? 1.0f : 0.0f);
 		}
 	}
-	*job = (collider_job){
-	    sim, c, bounded, world_lower, world_upper, ball_centre, ball_radius, still, identity, indices, 0};
+	*job = (collider_job){sim,   c,        bounded, world_lower, world_upper, ball_centre, ball_radius,
+	                      still, identity, indices, NULL,        NULL,        NULL,        0};
 }
 
-/* Particles indices[0, count) (all particles when indices is NULL) against collider c. */
-static int collide_with_collider(plait_sim *sim, const plait_collider *c, const int *indices, int count)
+/* Particles indices[0, count) (all particles when indices is NULL) against collider c. With
+ * listed (plait_collide_listed_with_colliders), the particles a triangle push moves are added to
+ * indices, grown_count counting them all. */
+static int collide_with_collider(plait_sim *sim, const plait_collider *c, int *indices, int count,
+                                 int *listed, int *grown_count)
 {
 	plait_particles *p = &sim->particles;
 	collider_job job;
 	prepare_collider_job(sim, c, indices, &job);
+	job.listed = listed;
+	job.grown_indices = indices;
+	job.grown_count = grown_count;
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
@@ -1071,14 +1082,14 @@ void plait_collide(plait_sim *sim)
 	}
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
-			contacts += collide_with_collider(sim, &sim->colliders[k], NULL, 0);
+			contacts += collide_with_collider(sim, &sim->colliders[k], NULL, 0, NULL, NULL);
 		}
 	}
 	/* Where colliders meet (an elbow), pushing a particle out of one can push it into another:
 	 * back over them in reverse order, so that a particle in the crease settles outside both. */
 	for (int k = sim->collider_count - 2; k >= 0; --k) {
 		if (sim->colliders[k].collide) {
-			(void)collide_with_collider(sim, &sim->colliders[k], NULL, 0);
+			(void)collide_with_collider(sim, &sim->colliders[k], NULL, 0, NULL, NULL);
 		}
 	}
 	sim->contacts += contacts;
@@ -1149,12 +1160,12 @@ void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass)
 	}
 }
 
-int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count)
+int plait_collide_listed_with_colliders(plait_sim *sim, int *indices, int *count, int *listed)
 {
 	int contacts = 0;
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
-			contacts += collide_with_collider(sim, &sim->colliders[k], indices, count);
+			contacts += collide_with_collider(sim, &sim->colliders[k], indices, *count, listed, count);
 		}
 	}
 	return contacts;

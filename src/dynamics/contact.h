@@ -39,6 +39,10 @@ typedef struct plait_collider_job {
 	bool still;         /* the same placement at both ends of the substep: surface velocity zero */
 	bool identity;      /* still, and shape space is world space: no transforms at all */
 	const int *indices; /* the particles to test, or NULL for all */
+	/* With indices, from plait_collide_listed_with_colliders: per particle, >= 0 for those in
+	 * indices; and where to add the others that triangle pushes move (indices, its count). */
+	int *listed;
+	int *grown_indices, *grown_count;
 	_Atomic int contacts;
 } plait_collider_job;
 
@@ -61,9 +65,12 @@ void plait_collider_pass_range(plait_collider_pass *pass, int begin, int end);
 /* Adds the pass's contacts to the frame's. */
 void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass);
 
-/* The collider part of an iteration for the particles indices[0, count) only (after the
- * failsafe moved them). */
-int plait_collide_listed_with_colliders(plait_sim *sim, const int *indices, int count);
+/* The collider part of an iteration for the particles indices[0, *count) only (after the
+ * failsafe moved them); listed[i] >= 0 exactly for those. A cloth triangle dipping into a round
+ * collider is pushed out whole: each particle it moves that was not listed is added (listed[i]
+ * = i, appended to indices, *count grows), so that the caller knows every particle it moved
+ * (the failsafe sweeps again around them; indices needs room for every particle). */
+int plait_collide_listed_with_colliders(plait_sim *sim, int *indices, int *count, int *listed);
 
 /* Restitution on the particle-pair contacts of the substep (after v = (x - x_prev) / h). */
 void plait_contacts_end_substep(plait_sim *sim);

@@ -433,13 +433,17 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 					}
 				}
 			}
-			sim->failsafe += 1;
+			/* A lone vertex that a round collider's triangle push added (see below) is no
+			 * impact zone until frozen. */
+			sim->failsafe += end - start > 1 || round >= ZONE_ROUNDS;
 			start = end;
 		}
 		/* Colliders have the last word over the moved vertices too; the next round checks that
-		 * this crossed nothing. */
+		 * this crossed nothing. A triangle pushed out of a round collider may move vertices of
+		 * no zone: they join as zones of their own, to be swept again with the others. */
 		if (round < ZONE_ROUNDS) {
-			sim->contacts += plait_collide_listed_with_colliders(sim, mc->touched, mc->touched_count);
+			sim->contacts +=
+			    plait_collide_listed_with_colliders(sim, mc->touched, &mc->touched_count, mc->zone_parent);
 		}
 	}
 	for (int k = 0; k < mc->touched_count; ++k) {
