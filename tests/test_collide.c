@@ -810,6 +810,134 @@ Test(collide, a_fine_sheets_list_holds_every_pair_in_reach_but_its_rest_pairs)
 	plait_destroy_world(world);
 }
 
+/* A short list (mc->short_lists: serving only its own substep) against every pair there is. */
+typedef struct short_tally {
+	const plait_mesh_contacts *mc;
+	const unsigned long long *keys; /* pair_key of each listed pair, sorted */
+	int count;
+	int in_contact, contact_missing, paths_meet, paths_missing;
+} short_tally;
+
+static const contact_pair *listed_pair(const short_tally *tally, int type, const int *v)
+{
+	unsigned long long key = pair_key(type, v);
+	for (int k = 0; k < tally->mc->pair_count; ++k) {
+		if (pair_key(tally->mc->pairs[k].type, tally->mc->pairs[k].v) == key) {
+			return &tally->mc->pairs[k];
+		}
+	}
+	return NULL;
+}
+
+static void tally_short_pair(short_tally *tally, const plait_particles *p, int type, const int *v)
+{
+	const float contact = 0.01f, margin = 1e-4f;
+	vec3 now[4], start[4], rest[4];
+	for (int m = 0; m < 4; ++m) {
+		now[m] = p->point[v[m]].x;
+		start[m] = p->x_prev[v[m]];
+		rest[m] = p->x_start[v[m]];
+	}
+	if (plait_mesh_contacts_primitive_distance(type, rest) < contact + margin) {
+		return; /* a rest pair, or at the edge of one: the failsafe sweeps those apart */
+	}
+	float d = plait_mesh_contacts_primitive_distance(type, now);
+	unsigned long long key = pair_key(type, v);
+	bool found = bsearch(&key, tally->keys, (size_t)tally->count, sizeof key, compare_keys) != NULL;
+	bool inside = true;
+	if (type == PAIR_EDGE_EDGE) {
+		float s, q;
+		plait_closest_segments(now[0], now[1], now[2], now[3], &s, &q);
+		inside = s > 1e-3f && s < 1.0f - 1e-3f && q > 1e-3f && q < 1.0f - 1e-3f;
+	}
+	if (d < contact - margin && inside) {
+		/* In contact now: listed, and pushing. */
+		tally->in_contact += 1;
+		const contact_pair *pair = found ? listed_pair(tally, type, v) : NULL;
+		tally->contact_missing += pair == NULL || !(pair->distance > 0.0f);
+	}
+	if (plait_mesh_contacts_paths_meet(type, start, now, 1e-6f)) {
+		/* Their paths so far met: listed, for the failsafe at least. */
+		tally->paths_meet += 1;
+		tally->paths_missing += !found;
+	}
+}
+
+/* Where vertices leave their paths every substep, lists serve only their own substep and reach
+ * only as far as that needs (mesh_contact_listing.c): the pairs in contact now, pushing, and
+ * those whose paths since the substep's start may have met. A fine sheet folded in two, whose
+ * upper half came up through the lower one this substep: the short list must hold all of
+ * those, and be shorter than a list that serves on. */
+Test(collide, a_short_list_holds_the_pairs_in_contact_and_those_whose_paths_met)
+{
+	plait_world_id world = weightless_world();
+	plait_object_id cloth = sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.005f, 0);
+	cr_assert(test_step_frames(world, 1));
+	plait_sim *sim = &world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	cr_assert(mc != NULL && mc->active);
+	plait_particles *p = &sim->particles;
+	/* Folded in two at x = 0: where z < 0 the upper half lies 8 mm over the lower (in contact);
+	 * where z > 0 it lies 25 mm over it (out of contact), having come up through it this
+	 * substep (away from the fold: x < -2 cm). */
+	for (int i = 0; i < p->count; ++i) {
+		vec3 s = p->x_start[i];
+		bool upper = s.x > 0.0f, through = upper && s.z > 0.0f && s.x > 0.02f;
+		vec3 x = upper ? v3(-s.x, s.z > 0.0f ? 0.025f : 0.008f, s.z) : s;
+		vec3 motion = v3(0.0f, through ? 0.03f : 0.001f * sinf(90.0f * s.z), 0.0f);
+		p->point[i].x = x;
+		p->x_prev[i] = v3_sub(x, motion);
+	}
+	mc->short_lists = false;
+	plait_mesh_contacts_gather(sim, mc);
+	int long_count = mc->pair_count;
+	mc->short_lists = true;
+	plait_mesh_contacts_gather(sim, mc);
+	cr_assert_eq(mc->list_serves, 0);
+	cr_expect_lt(mc->pair_count, long_count, "the short list (%d pairs) is no shorter than a long one (%d)",
+	             mc->pair_count, long_count);
+	unsigned long long *listed = malloc(sizeof *listed * (size_t)(mc->pair_count > 0 ? mc->pair_count : 1));
+	for (int k = 0; k < mc->pair_count; ++k) {
+		listed[k] = pair_key(mc->pairs[k].type, mc->pairs[k].v);
+	}
+	qsort(listed, (size_t)mc->pair_count, sizeof *listed, compare_keys);
+	int triangles = plait_object_get_triangles(cloth, NULL, 0);
+	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
+	plait_object_get_triangles(cloth, tri, triangles);
+	int first = mc->elements[0].v[0] - tri[0];
+	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0};
+	for (int t = 0; t < triangles; ++t) {
+		for (int i = 0; i < p->count; ++i) {
+			int v[4] = {i, first + tri[3 * t], first + tri[3 * t + 1], first + tri[3 * t + 2]};
+			if (v[0] != v[1] && v[0] != v[2] && v[0] != v[3]) {
+				tally_short_pair(&tally, p, PAIR_VERTEX_FACE, v);
+			}
+		}
+	}
+	for (int t = 0; t < triangles; ++t) {
+		for (int u = t; u < triangles; ++u) {
+			for (int i = 0; i < 3; ++i) {
+				for (int j = 0; j < 3; ++j) {
+					int v[4] = {first + tri[3 * t + i], first + tri[3 * t + (i + 1) % 3],
+					            first + tri[3 * u + j], first + tri[3 * u + (j + 1) % 3]};
+					if (v[0] != v[2] && v[0] != v[3] && v[1] != v[2] && v[1] != v[3]) {
+						tally_short_pair(&tally, p, PAIR_EDGE_EDGE, v);
+					}
+				}
+			}
+		}
+	}
+	cr_expect_gt(tally.in_contact, 1000, "only %d pairs in contact", tally.in_contact);
+	cr_expect_gt(tally.paths_meet, 20, "only %d pairs' paths met", tally.paths_meet);
+	cr_expect_eq(tally.contact_missing, 0, "%d of %d pairs in contact not listed as contacts",
+	             tally.contact_missing, tally.in_contact);
+	cr_expect_eq(tally.paths_missing, 0, "%d of %d pairs whose paths met not listed", tally.paths_missing,
+	             tally.paths_meet);
+	free(tri);
+	free(listed);
+	plait_destroy_world(world);
+}
+
 /* A sheet at rest and one moving into it at 1 m/s, weightless: who moves depends on layers. */
 static void push_between_layers(int resting_layer, int moving_layer, float *resting_moved, float *moving_end)
 {

@@ -256,6 +256,12 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		 * them; otherwise it is gathered again. */
 		int strays = 0, count = sim->particles.count;
 		bool holds = plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays);
+		if (mc->list_valid && mc->substep_serial - mc->gather_serial == 1) {
+			/* Whether the last list's vertices kept to their paths for the substep after its
+			 * gather's: if not, the next lists serve only their own substep, and reach only as
+			 * far as that needs (plait_mesh_contacts_gather). */
+			mc->short_lists = !mc->paths_kept;
+		}
 		if (holds && plait_mesh_contacts_few_strays(strays, count)) {
 			plait_mesh_contacts_relist_around(sim, mc);
 		} else if (!holds || strays > 0) {

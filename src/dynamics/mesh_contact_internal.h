@@ -182,6 +182,12 @@ typedef struct plait_mesh_contacts {
 	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
 	int *object_counts;                 /* per collision object: scratch of object_shifts */
 	float *allowance;                   /* per pair of objects: how far their boxes must reach across */
+	/* Substeps after its own that the list serves: LIST_SUBSTEPS, or 0 when the last list's
+	 * vertices left their paths before it could serve again (short_lists; see
+	 * plait_mesh_contacts_gather). paths_kept: the last check of a list found every vertex but
+	 * a few on its path. */
+	int list_serves;
+	bool short_lists, paths_kept;
 	/* Failsafe scratch: union-find over particles, and the particles it touched. */
 	int particle_capacity;
 	int *zone_parent;

@@ -69,13 +69,13 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
 			/* Swept along its vertices' paths relative to their object, from the gather's
-			 * substep's start to LIST_SUBSTEPS substeps on (its paths as the gather took them,
-			 * at a gather where it is now). */
+			 * substep's start to the end of the substeps the list serves (its paths as the
+			 * gather took them, at a gather where it is now). */
 			int o = mc->object_of[el->v[0]];
 			vec3 mean = o >= 0 ? mc->shift[o] : v3(0.0f, 0.0f, 0.0f); /* minus the object's */
 			for (int k = 0; k < el->size; ++k) {
 				vec3 x = mc->x_gather[el->v[k]], w = v3_add(mc->motion[el->v[k]], mean);
-				vec3 back = v3_sub(x, w), on = v3_mul_add(x, (float)LIST_SUBSTEPS, w);
+				vec3 back = v3_sub(x, w), on = v3_mul_add(x, (float)mc->list_serves, w);
 				lower = v3_min(lower, v3_min(x, v3_min(back, on)));
 				upper = v3_max(upper, v3_max(x, v3_max(back, on)));
 			}
@@ -183,7 +183,13 @@ static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const v
  * guards, and so do any two points of two primitives (points of a primitive move by means of
  * its vertices' motions); the element pair walk lists the pairs nearer than their contact
  * distance plus that. Neighbours that move together (a cloth falling or swinging as a whole)
- * then list only what is really close, and keep their list while they move steadily. */
+ * then list only what is really close, and keep their list while they move steadily.
+ * Where vertices do not keep to their paths (cloth thrown about on a collider, squeezed in
+ * folds), a list that serves on is gathered again at the next substep anyway: there the lists
+ * are short (mc->short_lists) and serve only their own substep. They list the pairs within
+ * their contact distance now (plus their guards) and those whose paths so far may have met,
+ * not those that may meet in the next substep: a pair's reach is the larger of its contact
+ * distance and its motion, not their sum. */
 /* Gravity's bend of a path over the substeps a list serves. */
 static float path_bend(const plait_sim *sim)
 {
@@ -205,6 +211,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->out_of_memory = false;
 	mc->gather_serial = mc->substep_serial;
 	mc->listings += 1;
+	mc->list_serves = mc->short_lists ? 0 : LIST_SUBSTEPS;
 	const plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
 		mc->x_gather[i] = p->point[i].x;
@@ -247,6 +254,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
  * *stray_count instead: the list then holds every pair of two vertices that are not. */
 static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
 {
+	mc->paths_kept = false;
 	if (!mc->list_valid) {
 		return false;
 	}
@@ -287,7 +295,10 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *s
 	if (stray_count != NULL) {
 		*stray_count = strays;
 	}
-	return true;
+	/* The paths held (as far as a list that served on would need), but a short list does not
+	 * reach past its own substep. */
+	mc->paths_kept = strays == 0 || plait_mesh_contacts_few_strays(strays, p->count);
+	return since <= mc->list_serves;
 }
 
 bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc)

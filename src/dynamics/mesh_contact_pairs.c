@@ -647,10 +647,17 @@ static void visit_elements(int a, int b, void *context)
 		/* Re-listing around strayed vertices measures from now, when the others may already
 		 * be a guard off their paths. */
 		float guards = (pass->around_only ? 2.0f : 1.0f) * (mc->element_guard[a] + mc->element_guard[b]);
-		pass->pair_slack = (float)LIST_SUBSTEPS * relative + guards;
-		pass->list_distance = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]) +
-		                      pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
+		float contact = LIST_SCALE * scale * (mc->element_reach[a] + mc->element_reach[b]);
+		/* Over the substep so far (back) and the substeps the list serves on. */
+		float window = (float)(mc->list_serves > 1 ? mc->list_serves : 1);
+		pass->pair_slack = window * relative + guards;
 		pass->failsafe_reach = pass->pair_slack + 2.0f * FAILSAFE_DISTANCE;
+		/* A list that serves on holds the pairs that may come within their contact distance
+		 * meanwhile; one that serves only its substep, those within it now, and those that may
+		 * have crossed since the substep began (pushed back to their side). */
+		pass->list_distance = mc->list_serves > 0
+		                          ? contact + pass->pair_slack + 2.0f * FAILSAFE_DISTANCE
+		                          : plait_maxf(contact, relative) + guards + 2.0f * FAILSAFE_DISTANCE;
 	}
 	if (pass->stage == STAGE_GATHER && ma == mb && ea->size == 3 && eb->size == 3 &&
 	    !self_pushes(ma, PAIR_VERTEX_VERTEX) && ma->type != PLAIT_OBJECT_COLLIDER) {
