@@ -3,6 +3,7 @@
  * made rigid, or put back where the substep began. */
 #include "dynamics/mesh_contact_internal.h"
 
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -187,30 +188,63 @@ void plait_mesh_contacts_sweep_pair(pair_pass *pass, int type, const int *v)
 
 /* The rest pairs, each swept unless a lower bound of its distance at the substep's start, less
  * what its motion (relative to its first vertex) can take off, still keeps it apart. The bound
- * is carried from substep to substep, and known exactly again whenever the pair is swept. */
-static void sweep_rest_pairs(pair_pass *pass)
+ * is carried from substep to substep, and known exactly again whenever the pair is swept. On
+ * the workers, a chunk of pairs each (a large cloth holds millions); the crossing ones are
+ * marked, and join their zones afterwards in the pairs' order. */
+typedef struct rest_sweep_job {
+	plait_mesh_contacts *mc;
+	const plait_particles *p;
+	float distance;
+	_Atomic int crossed;
+} rest_sweep_job;
+
+static void sweep_rest_range(void *context, int begin, int end)
 {
-	plait_mesh_contacts *mc = pass->mc;
-	const plait_particles *p = &pass->sim->particles;
-	for (int k = 0; k < mc->rest_count; ++k) {
-		contact_pair *pair = &mc->rest_pairs[k];
+	rest_sweep_job *job = context;
+	const plait_particles *p = job->p;
+	int crossed = 0;
+	for (int k = begin; k < end; ++k) {
+		rest_pair *pair = &job->mc->rest_pairs[k];
 		int n = pair_size[pair->type];
-		vec3 start[4] = {{0}}, end[4] = {{0}};
+		vec3 start[4] = {{0}}, end_points[4] = {{0}};
 		gather_points(p->x_prev, pair->v, n, start);
-		gather_current(p->point, pair->v, n, end);
-		float motion = plait_mesh_contacts_largest_motion(pair->type, start, end);
-		if (pair->lower - motion > pass->failsafe_distance) {
+		gather_current(p->point, pair->v, n, end_points);
+		float motion = plait_mesh_contacts_largest_motion(pair->type, start, end_points);
+		if (pair->lower - motion > job->distance) {
 			pair->lower -= motion;
 			continue;
 		}
-		pair->lower = plait_mesh_contacts_primitive_distance(pair->type, end);
+		pair->lower = plait_mesh_contacts_primitive_distance(pair->type, end_points);
 		float d0 = plait_mesh_contacts_primitive_distance(pair->type, start);
-		if (0.5f * (d0 + pair->lower - motion) > pass->failsafe_distance) {
+		if (0.5f * (d0 + pair->lower - motion) > job->distance) {
 			continue;
 		}
-		if (plait_mesh_contacts_paths_meet(pair->type, start, end, pass->failsafe_distance)) {
+		if (plait_mesh_contacts_paths_meet(pair->type, start, end_points, job->distance)) {
+			pair->crossed = 1;
+			crossed += 1;
+		}
+	}
+	if (crossed > 0) {
+		atomic_fetch_add_explicit(&job->crossed, crossed, memory_order_relaxed);
+	}
+}
+
+#define REST_GRAIN 8192
+
+static void sweep_rest_pairs(pair_pass *pass)
+{
+	plait_mesh_contacts *mc = pass->mc;
+	rest_sweep_job job = {mc, &pass->sim->particles, pass->failsafe_distance, 0};
+	plait_parallel_for(&pass->sim->parallel, sweep_rest_range, &job, 0, mc->rest_count, REST_GRAIN);
+	if (atomic_load_explicit(&job.crossed, memory_order_relaxed) == 0) {
+		return;
+	}
+	for (int k = 0; k < mc->rest_count; ++k) {
+		rest_pair *pair = &mc->rest_pairs[k];
+		if (pair->crossed) {
+			pair->crossed = 0;
 			pass->hits += 1;
-			join_zone(mc, pair->v, n);
+			join_zone(mc, pair->v, pair_size[pair->type]);
 		}
 	}
 }

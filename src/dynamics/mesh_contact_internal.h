@@ -96,6 +96,16 @@ typedef struct contact_pair {
 	float lower;    /* rest pairs: a lower bound of their distance now, < 0 when unknown */
 } contact_pair;
 
+/* A rest pair (plait_mesh_contacts.rest_pairs): only swept, every substep, so kept small (a
+ * large cloth holds millions). lower: a lower bound of its distance, carried from substep to
+ * substep, < 0 when unknown. */
+typedef struct rest_pair {
+	int v[4];
+	float lower;
+	uint8_t type;
+	uint8_t crossed; /* found crossing by a sweep on the workers, its zone not joined yet */
+} rest_pair;
+
 /* Listing on the workers (plait_mesh_contacts_gather_on_workers): a piece of a traversal, and its
  * own list. */
 typedef struct gather_piece {
@@ -148,7 +158,7 @@ typedef struct plait_mesh_contacts {
 	 * ALL_REST_SLOTS when every primitive pair it owns is a rest pair or shares a vertex (it is
 	 * then excluded whole). The gather passes over rest slots before any distance. */
 	int rest_count, rest_capacity;
-	struct contact_pair *rest_pairs;
+	struct rest_pair *rest_pairs;
 	int *near_start;
 	struct near_element *near_list;
 	bool active;

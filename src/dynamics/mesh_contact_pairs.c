@@ -83,6 +83,25 @@ static bool add_pair_to(plait_sim *sim, contact_pair **pairs, int *count, int *c
 	return true;
 }
 
+static bool add_rest_pair(plait_sim *sim, plait_mesh_contacts *mc, const rest_pair *pair)
+{
+	if (mc->rest_count == mc->rest_capacity) {
+		int bigger_capacity = mc->rest_capacity < 256 ? 256 : 2 * mc->rest_capacity;
+		rest_pair *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		if (bigger == NULL) {
+			return false;
+		}
+		if (mc->rest_count > 0) {
+			memcpy(bigger, mc->rest_pairs, sizeof *bigger * (size_t)mc->rest_count);
+		}
+		plait_free(&sim->allocator, mc->rest_pairs);
+		mc->rest_pairs = bigger;
+		mc->rest_capacity = bigger_capacity;
+	}
+	mc->rest_pairs[mc->rest_count++] = *pair;
+	return true;
+}
+
 static bool add_pair(pair_pass *pass, const contact_pair *pair)
 {
 	if (pass->fixed_capacity && *pass->out_count == *pass->out_capacity) {
@@ -267,16 +286,8 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 		if (type == PAIR_VERTEX_VERTEX) {
 			return; /* no crossing to watch */
 		}
-		contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
-		                     (uint8_t)type,
-		                     1,
-		                     0.0f,
-		                     0.0f,
-		                     1.0f,
-		                     {0.0f, 1.0f, 0.0f},
-		                     {1.0f, 1.0f},
-		                     -1.0f};
-		if (!add_pair_to(sim, &mc->rest_pairs, &mc->rest_count, &mc->rest_capacity, &pair)) {
+		rest_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]}, -1.0f, (uint8_t)type, 0};
+		if (!add_rest_pair(sim, mc, &pair)) {
 			pass->failed = true;
 		}
 		return;
