@@ -231,7 +231,10 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 	if (distance > 0.0f && !self) {
 		vec3 initial[4];
 		gather_points(p->x_start, v, n, initial);
-		pair.distance = plait_minf(distance, plait_mesh_contacts_primitive_distance(type, initial));
+		/* The cheap bound first: most pairs of two objects started far apart. */
+		if (plait_mesh_contacts_distance_lower_bound(type, initial) < distance) {
+			pair.distance = plait_minf(distance, plait_mesh_contacts_primitive_distance(type, initial));
+		}
 	}
 	if (at_end) {
 		pair.distance = 0.0f;
