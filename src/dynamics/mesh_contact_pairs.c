@@ -401,10 +401,11 @@ static int bits3(unsigned bits)
 	return (int)(bits & 1u) + (int)((bits >> 1) & 1u) + (int)((bits >> 2) & 1u);
 }
 
-/* The primitive pairs an element pair owns, each handed to visit_primitives. In the gather,
- * most are rejected first from the elements' points (loaded once) and shapes, before
- * visit_primitives loads them again for its exact test; the other stages see them all. The
- * failsafe leaves vertex-vertex pairs out (nothing to cross). */
+/* The primitive pairs an element pair owns, each handed to visit_primitives (the rest pairs'
+ * stage, the failsafe) or, in the gather, tested from the elements' points (loaded once) and
+ * shapes: vertex-face pairs rejected by point_far go no further, the others go to list_face
+ * and list_edges. The failsafe leaves vertex-vertex pairs out (nothing to cross). A cloth's own
+ * triangle pairs take gather_triangle_pair in the gather, the same tests in the same order. */
 static void walk_element_pair(pair_pass *pass, int a, int b, const plait_material *ma,
                               const plait_material *mb, bool self)
 {
