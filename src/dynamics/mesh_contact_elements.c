@@ -15,6 +15,10 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	mc->element_motion = NULL;
 	plait_free(a, mc->element_spread);
 	mc->element_spread = NULL;
+	plait_free(a, mc->element_substep_motion);
+	mc->element_substep_motion = NULL;
+	plait_free(a, mc->element_substep_spread);
+	mc->element_substep_spread = NULL;
 	plait_free(a, mc->element_around);
 	mc->element_around = NULL;
 	plait_free(a, mc->shapes);
@@ -44,6 +48,9 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	plait_free(a, mc->rest_pairs);
 	mc->rest_pairs = NULL;
 	mc->rest_count = mc->rest_capacity = 0;
+	plait_free(a, mc->rest_groups);
+	mc->rest_groups = NULL;
+	mc->rest_group_count = mc->rest_group_capacity = 0;
 	mc->near_start = NULL;
 	mc->near_list = NULL;
 	mc->objects = NULL;
@@ -108,6 +115,8 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->element_guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->element_spread = plait_alloc_zero(a, (size_t)count, sizeof(float));
+	mc->element_substep_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->element_substep_spread = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
 	mc->shapes = plait_alloc_zero(a, (size_t)count, sizeof *mc->shapes);
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
@@ -121,9 +130,10 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	bool active = false;
 	int edge_count = 0;
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
-	          mc->element_motion != NULL && mc->element_spread != NULL && mc->element_around != NULL &&
-	          mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL && edges != NULL &&
-	          owned != NULL && mc->objects != NULL;
+	          mc->element_motion != NULL && mc->element_spread != NULL &&
+	          mc->element_substep_motion != NULL && mc->element_substep_spread != NULL &&
+	          mc->element_around != NULL && mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL &&
+	          edges != NULL && owned != NULL && mc->objects != NULL;
 	if (ok) {
 		int e = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {

@@ -3,6 +3,7 @@
  * made rigid, or put back where the substep began. */
 #include "dynamics/mesh_contact_internal.h"
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -188,9 +189,10 @@ void plait_mesh_contacts_sweep_pair(pair_pass *pass, int type, const int *v)
 
 /* The rest pairs, each swept unless a lower bound of its distance at the substep's start, less
  * what its motion (relative to its first vertex) can take off, still keeps it apart. The bound
- * is carried from substep to substep, and known exactly again whenever the pair is swept. On
- * the workers, a chunk of pairs each (a large cloth holds millions); the crossing ones are
- * marked, and join their zones afterwards in the pairs' order. */
+ * is carried from substep to substep, and known exactly again whenever the pair is swept. The
+ * pairs of one element pair are first passed over together (rest_group) while the group's
+ * bound holds. On the workers, a chunk of groups each (a large cloth holds millions of pairs);
+ * the crossing pairs are marked, and join their zones afterwards in the pairs' order. */
 typedef struct rest_sweep_job {
 	plait_mesh_contacts *mc;
 	const plait_particles *p;
@@ -198,44 +200,92 @@ typedef struct rest_sweep_job {
 	_Atomic int crossed;
 } rest_sweep_job;
 
+/* Each element's mean motion over the substep and how far its vertices' motions are from it:
+ * two elements' points come closer by at most their spreads and the difference of their
+ * means (a primitive's points move by means of its vertices' motions). */
+static void element_substep_motions(void *context, int begin, int end)
+{
+	const rest_sweep_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	const plait_particles *p = job->p;
+	for (int e = begin; e < end; ++e) {
+		const element *el = &mc->elements[e];
+		vec3 d[3];
+		vec3 mean = v3(0.0f, 0.0f, 0.0f);
+		for (int k = 0; k < el->size; ++k) {
+			d[k] = v3_sub(p->point[el->v[k]].x, p->x_prev[el->v[k]]);
+			mean = v3_add(mean, d[k]);
+		}
+		mean = v3_scale(mean, 1.0f / (float)el->size);
+		float spread = 0.0f;
+		for (int k = 0; k < el->size; ++k) {
+			spread = plait_maxf(spread, v3_length_sq(v3_sub(d[k], mean)));
+		}
+		mc->element_substep_motion[e] = mean;
+		mc->element_substep_spread[e] = sqrtf(spread);
+	}
+}
+
 static void sweep_rest_range(void *context, int begin, int end)
 {
 	rest_sweep_job *job = context;
 	const plait_particles *p = job->p;
 	int crossed = 0;
-	for (int k = begin; k < end; ++k) {
-		rest_pair *pair = &job->mc->rest_pairs[k];
-		int n = pair_size[pair->type];
-		vec3 start[4] = {{0}}, end_points[4] = {{0}};
-		gather_points(p->x_prev, pair->v, n, start);
-		gather_current(p->point, pair->v, n, end_points);
-		float motion = plait_mesh_contacts_largest_motion(pair->type, start, end_points);
-		if (pair->lower - motion > job->distance) {
-			pair->lower -= motion;
+	for (int g = begin; g < end; ++g) {
+		rest_group *group = &job->mc->rest_groups[g];
+		const plait_mesh_contacts *mc = job->mc;
+		float group_loss =
+		    mc->element_substep_spread[group->a] + mc->element_substep_spread[group->b] +
+		    v3_length(v3_sub(mc->element_substep_motion[group->a], mc->element_substep_motion[group->b]));
+		if (group->lower - group_loss > job->distance) {
+			group->lower -= group_loss;
+			group->pending += group_loss;
 			continue;
 		}
-		pair->lower = plait_mesh_contacts_primitive_distance(pair->type, end_points);
-		float d0 = plait_mesh_contacts_primitive_distance(pair->type, start);
-		if (0.5f * (d0 + pair->lower - motion) > job->distance) {
-			continue;
+		float lowest = INFINITY;
+		for (int k = group->first; k < group->first + group->count; ++k) {
+			rest_pair *pair = &job->mc->rest_pairs[k];
+			pair->lower -= group->pending; /* the motion the group took off for it */
+			int n = pair_size[pair->type];
+			vec3 start[4] = {{0}}, end_points[4] = {{0}};
+			gather_points(p->x_prev, pair->v, n, start);
+			gather_current(p->point, pair->v, n, end_points);
+			float motion = plait_mesh_contacts_largest_motion(pair->type, start, end_points);
+			if (pair->lower - motion > job->distance) {
+				pair->lower -= motion;
+				lowest = plait_minf(lowest, pair->lower);
+				continue;
+			}
+			pair->lower = plait_mesh_contacts_primitive_distance(pair->type, end_points);
+			lowest = plait_minf(lowest, pair->lower);
+			float d0 = plait_mesh_contacts_primitive_distance(pair->type, start);
+			if (0.5f * (d0 + pair->lower - motion) > job->distance) {
+				continue;
+			}
+			if (plait_mesh_contacts_paths_meet(pair->type, start, end_points, job->distance)) {
+				pair->crossed = 1;
+				crossed += 1;
+			}
 		}
-		if (plait_mesh_contacts_paths_meet(pair->type, start, end_points, job->distance)) {
-			pair->crossed = 1;
-			crossed += 1;
-		}
+		group->pending = 0.0f;
+		group->lower = lowest;
 	}
 	if (crossed > 0) {
 		atomic_fetch_add_explicit(&job->crossed, crossed, memory_order_relaxed);
 	}
 }
 
-#define REST_GRAIN 8192
+#define REST_GRAIN 2048
 
 static void sweep_rest_pairs(pair_pass *pass)
 {
 	plait_mesh_contacts *mc = pass->mc;
 	rest_sweep_job job = {mc, &pass->sim->particles, pass->failsafe_distance, 0};
-	plait_parallel_for(&pass->sim->parallel, sweep_rest_range, &job, 0, mc->rest_count, REST_GRAIN);
+	if (mc->rest_group_count == 0) {
+		return;
+	}
+	plait_parallel_for(&pass->sim->parallel, element_substep_motions, &job, 0, mc->element_count, REST_GRAIN);
+	plait_parallel_for(&pass->sim->parallel, sweep_rest_range, &job, 0, mc->rest_group_count, REST_GRAIN);
 	if (atomic_load_explicit(&job.crossed, memory_order_relaxed) == 0) {
 		return;
 	}
@@ -253,6 +303,10 @@ void plait_mesh_contacts_forget_rest_bounds(plait_mesh_contacts *mc)
 {
 	for (int k = 0; k < mc->rest_count; ++k) {
 		mc->rest_pairs[k].lower = -1.0f;
+	}
+	for (int g = 0; g < mc->rest_group_count; ++g) {
+		mc->rest_groups[g].lower = -1.0f;
+		mc->rest_groups[g].pending = 0.0f;
 	}
 }
 

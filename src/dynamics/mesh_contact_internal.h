@@ -106,6 +106,17 @@ typedef struct rest_pair {
 	uint8_t crossed; /* found crossing by a sweep on the workers, its zone not joined yet */
 } rest_pair;
 
+/* The rest pairs of one element pair, rest_pairs[first, first + count). While lower (a lower
+ * bound of all their distances, < 0 when unknown), less what the two elements' motions over the
+ * substep can take off (their spreads and the difference of their means), keeps them apart,
+ * they are passed over whole, and what was taken off is kept in pending, for each pair's own
+ * bound when they are swept again. */
+typedef struct rest_group {
+	int first, count;
+	int a, b; /* the elements */
+	float lower, pending;
+} rest_group;
+
 /* Listing on the workers (plait_mesh_contacts_gather_on_workers): a piece of a traversal, and its
  * own list. */
 typedef struct gather_piece {
@@ -136,6 +147,9 @@ typedef struct plait_mesh_contacts {
 	float *element_guard;  /* an element's largest guard (at the last listing) */
 	vec3 *element_motion;  /* the mean of its vertices' motions (at the last listing) */
 	float *element_spread; /* how far its vertices' motions are from that mean */
+	/* The same over the substep, start to end, for the rest pairs' sweep (failsafe scratch). */
+	vec3 *element_substep_motion;
+	float *element_substep_spread;
 	element_shape *shapes; /* at the last listing */
 	vec3 *lower, *upper;   /* element boxes */
 	int object_count;
@@ -159,6 +173,8 @@ typedef struct plait_mesh_contacts {
 	 * then excluded whole). The gather passes over rest slots before any distance. */
 	int rest_count, rest_capacity;
 	struct rest_pair *rest_pairs;
+	int rest_group_count, rest_group_capacity;
+	struct rest_group *rest_groups; /* the rest pairs of each element pair, swept as one */
 	int *near_start;
 	struct near_element *near_list;
 	bool active;

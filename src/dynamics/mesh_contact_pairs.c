@@ -102,6 +102,26 @@ static bool add_rest_pair(plait_sim *sim, plait_mesh_contacts *mc, const rest_pa
 	return true;
 }
 
+/* The rest pairs found since `first` (those of element pair a, b) as one group. */
+static bool add_rest_group(plait_sim *sim, plait_mesh_contacts *mc, int first, int a, int b)
+{
+	if (mc->rest_group_count == mc->rest_group_capacity) {
+		int bigger_capacity = mc->rest_group_capacity < 256 ? 256 : 2 * mc->rest_group_capacity;
+		rest_group *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		if (bigger == NULL) {
+			return false;
+		}
+		if (mc->rest_group_count > 0) {
+			memcpy(bigger, mc->rest_groups, sizeof *bigger * (size_t)mc->rest_group_count);
+		}
+		plait_free(&sim->allocator, mc->rest_groups);
+		mc->rest_groups = bigger;
+		mc->rest_group_capacity = bigger_capacity;
+	}
+	mc->rest_groups[mc->rest_group_count++] = (rest_group){first, mc->rest_count - first, a, b, -1.0f, 0.0f};
+	return true;
+}
+
 static bool add_pair(pair_pass *pass, const contact_pair *pair)
 {
 	if (pass->fixed_capacity && *pass->out_count == *pass->out_capacity) {
@@ -679,7 +699,12 @@ static void visit_elements(int a, int b, void *context)
 		gather_triangle_pair(pass, a, b, ma);
 		return;
 	}
+	int rest_before = mc->rest_count;
 	walk_element_pair(pass, a, b, ma, mb, self);
+	if (pass->stage == STAGE_REST && mc->rest_count > rest_before && !pass->failed &&
+	    !add_rest_group(pass->sim, pass->mc, rest_before, a, b)) {
+		pass->failed = true;
+	}
 	if (pass->stage == STAGE_REST && (pass->all_rest || pass->rest_slots != 0) && !pass->failed) {
 		if (pass->near_count == pass->near_capacity) {
 			int capacity = pass->near_capacity < 1024 ? 1024 : 2 * pass->near_capacity;
