@@ -30,6 +30,20 @@ void *plait_alloc_zero(const plait_allocator *allocator, size_t count, size_t el
 	return memory;
 }
 
+void *plait_alloc_grow(const plait_allocator *allocator, void *array, size_t element_size, int count_used,
+                       int new_capacity)
+{
+	void *bigger = plait_alloc_zero(allocator, (size_t)new_capacity, element_size);
+	if (bigger == NULL) {
+		return NULL;
+	}
+	if (array != NULL && count_used > 0) {
+		memcpy(bigger, array, (size_t)count_used * element_size);
+	}
+	plait_free(allocator, array);
+	return bigger;
+}
+
 void plait_free(const plait_allocator *allocator, void *memory)
 {
 	if (memory == NULL) {

@@ -967,14 +967,11 @@ static bool ensure_pair_contacts(plait_sim *sim)
 		return true;
 	}
 	int capacity = wanted * 2;
-	plait_particle_contact *bigger = plait_alloc_zero(&sim->allocator, (size_t)capacity, sizeof *bigger);
+	plait_particle_contact *bigger = plait_alloc_grow(&sim->allocator, sim->pair_contacts, sizeof *bigger,
+	                                                  sim->pair_contact_count, capacity);
 	if (bigger == NULL) {
 		return false;
 	}
-	if (sim->pair_contact_count > 0) {
-		memcpy(bigger, sim->pair_contacts, sizeof *bigger * (size_t)sim->pair_contact_count);
-	}
-	plait_free(&sim->allocator, sim->pair_contacts);
 	sim->pair_contacts = bigger;
 	sim->pair_contact_capacity = capacity;
 	return true;

@@ -63,19 +63,22 @@ static float mean_radius(const plait_particles *p, const int *v, int n)
 	return sum / (float)n;
 }
 
+/* Room for twice as many (at least 256): the lists below grow as their traversals meet pairs. */
+static int grown_capacity(int capacity)
+{
+	return capacity < 256 ? 256 : 2 * capacity;
+}
+
 static bool add_pair_to(plait_sim *sim, contact_pair **pairs, int *count, int *capacity,
                         const contact_pair *pair)
 {
 	if (*count == *capacity) {
-		int bigger_capacity = *capacity < 256 ? 256 : 2 * *capacity;
-		contact_pair *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		int bigger_capacity = grown_capacity(*capacity);
+		contact_pair *bigger =
+		    plait_alloc_grow(&sim->allocator, *pairs, sizeof *bigger, *count, bigger_capacity);
 		if (bigger == NULL) {
 			return false;
 		}
-		if (*count > 0) {
-			memcpy(bigger, *pairs, sizeof *bigger * (size_t)*count);
-		}
-		plait_free(&sim->allocator, *pairs);
 		*pairs = bigger;
 		*capacity = bigger_capacity;
 	}
@@ -86,15 +89,12 @@ static bool add_pair_to(plait_sim *sim, contact_pair **pairs, int *count, int *c
 static bool add_rest_pair(plait_sim *sim, plait_mesh_contacts *mc, const rest_pair *pair)
 {
 	if (mc->rest_count == mc->rest_capacity) {
-		int bigger_capacity = mc->rest_capacity < 256 ? 256 : 2 * mc->rest_capacity;
-		rest_pair *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		int bigger_capacity = grown_capacity(mc->rest_capacity);
+		rest_pair *bigger = plait_alloc_grow(&sim->allocator, mc->rest_pairs, sizeof *bigger, mc->rest_count,
+		                                     bigger_capacity);
 		if (bigger == NULL) {
 			return false;
 		}
-		if (mc->rest_count > 0) {
-			memcpy(bigger, mc->rest_pairs, sizeof *bigger * (size_t)mc->rest_count);
-		}
-		plait_free(&sim->allocator, mc->rest_pairs);
 		mc->rest_pairs = bigger;
 		mc->rest_capacity = bigger_capacity;
 	}
@@ -106,15 +106,12 @@ static bool add_rest_pair(plait_sim *sim, plait_mesh_contacts *mc, const rest_pa
 static bool add_rest_group(plait_sim *sim, plait_mesh_contacts *mc, int first, int a, int b)
 {
 	if (mc->rest_group_count == mc->rest_group_capacity) {
-		int bigger_capacity = mc->rest_group_capacity < 256 ? 256 : 2 * mc->rest_group_capacity;
-		rest_group *bigger = plait_alloc_zero(&sim->allocator, (size_t)bigger_capacity, sizeof *bigger);
+		int bigger_capacity = grown_capacity(mc->rest_group_capacity);
+		rest_group *bigger = plait_alloc_grow(&sim->allocator, mc->rest_groups, sizeof *bigger,
+		                                      mc->rest_group_count, bigger_capacity);
 		if (bigger == NULL) {
 			return false;
 		}
-		if (mc->rest_group_count > 0) {
-			memcpy(bigger, mc->rest_groups, sizeof *bigger * (size_t)mc->rest_group_count);
-		}
-		plait_free(&sim->allocator, mc->rest_groups);
 		mc->rest_groups = bigger;
 		mc->rest_group_capacity = bigger_capacity;
 	}
@@ -708,15 +705,12 @@ static void visit_elements(int a, int b, void *context)
 	if (pass->stage == STAGE_REST && (pass->all_rest || pass->rest_slots != 0) && !pass->failed) {
 		if (pass->near_count == pass->near_capacity) {
 			int capacity = pass->near_capacity < 1024 ? 1024 : 2 * pass->near_capacity;
-			near_pair *bigger = plait_alloc_zero(&pass->sim->allocator, (size_t)capacity, sizeof *bigger);
+			near_pair *bigger = plait_alloc_grow(&pass->sim->allocator, pass->near, sizeof *bigger,
+			                                     pass->near_count, capacity);
 			if (bigger == NULL) {
 				pass->failed = true;
 				return;
 			}
-			if (pass->near_count > 0) {
-				memcpy(bigger, pass->near, sizeof *bigger * (size_t)pass->near_count);
-			}
-			plait_free(&pass->sim->allocator, pass->near);
 			pass->near = bigger;
 			pass->near_capacity = capacity;
 		}

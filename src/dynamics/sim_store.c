@@ -9,14 +9,10 @@
 static bool grow_array(const plait_allocator *allocator, void **array, size_t element_size, int count_used,
                        int new_capacity)
 {
-	void *bigger = plait_alloc_zero(allocator, (size_t)new_capacity, element_size);
+	void *bigger = plait_alloc_grow(allocator, *array, element_size, count_used, new_capacity);
 	if (bigger == NULL) {
 		return false;
 	}
-	if (*array != NULL && count_used > 0) {
-		memcpy(bigger, *array, (size_t)count_used * element_size);
-	}
-	plait_free(allocator, *array);
 	*array = bigger;
 	return true;
 }

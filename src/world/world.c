@@ -379,14 +379,11 @@ plait_object *plait_world_new_object(plait_world *world, plait_object_type type,
 {
 	if (world->object_count == world->object_capacity) {
 		int capacity = world->object_capacity < 8 ? 8 : world->object_capacity * 2;
-		plait_object *bigger = plait_alloc_zero(&world->allocator, (size_t)capacity, sizeof *bigger);
+		plait_object *bigger = plait_alloc_grow(&world->allocator, world->objects, sizeof *bigger,
+		                                        world->object_count, capacity);
 		if (bigger == NULL) {
 			return NULL;
 		}
-		if (world->object_count > 0) {
-			memcpy(bigger, world->objects, sizeof *bigger * (size_t)world->object_count);
-		}
-		plait_free(&world->allocator, world->objects);
 		world->objects = bigger;
 		world->object_capacity = capacity;
 	}
