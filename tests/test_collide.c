@@ -708,12 +708,45 @@ static int compare_keys(const void *a, const void *b)
 	return x < y ? -1 : x > y;
 }
 
+/* Every vertex of a cloth (particles first .. first + particle_count) against each of its
+ * triangles (tri, triangles of its own vertex indices), and every edge against every edge,
+ * each pair without a shared vertex handed to visit (pairs of edges that two triangles share
+ * are met more than once, which changes no tally's verdict). */
+typedef void pair_visit(void *context, int type, const int *v);
+
+static void visit_every_pair(const int *tri, int triangles, int first, int particle_count, pair_visit *visit,
+                             void *context)
+{
+	for (int t = 0; t < triangles; ++t) {
+		for (int i = 0; i < particle_count; ++i) {
+			int v[4] = {i, first + tri[3 * t], first + tri[3 * t + 1], first + tri[3 * t + 2]};
+			if (v[0] != v[1] && v[0] != v[2] && v[0] != v[3]) {
+				visit(context, PAIR_VERTEX_FACE, v);
+			}
+		}
+	}
+	for (int t = 0; t < triangles; ++t) {
+		for (int u = t; u < triangles; ++u) {
+			for (int i = 0; i < 3; ++i) {
+				for (int j = 0; j < 3; ++j) {
+					int v[4] = {first + tri[3 * t + i], first + tri[3 * t + (i + 1) % 3],
+					            first + tri[3 * u + j], first + tri[3 * u + (j + 1) % 3]};
+					if (v[0] != v[2] && v[0] != v[3] && v[1] != v[2] && v[1] != v[3]) {
+						visit(context, PAIR_EDGE_EDGE, v);
+					}
+				}
+			}
+		}
+	}
+}
+
 /* The fine sheet's listing against every pair there is: how many were in reach, how many of
  * those the list misses, and how many rest pairs it holds. */
 typedef struct listing_tally {
 	const unsigned long long *keys; /* pair_key of each listed pair, sorted */
 	int count;
 	int expected, missing, rest_listed;
+	const plait_particles *particles;
 } listing_tally;
 
 static void tally_pair(listing_tally *tally, const plait_particles *p, int type, const int *v)
@@ -741,6 +774,12 @@ static void tally_pair(listing_tally *tally, const plait_particles *p, int type,
 		tally->missing += !found;
 	}
 	tally->rest_listed += found && r < contact - margin;
+}
+
+static void tally_listing(void *context, int type, const int *v)
+{
+	listing_tally *tally = context;
+	tally_pair(tally, tally->particles, type, v);
 }
 
 /* A sheet whose edges (6.7 mm) are shorter than its contact distance (1 cm): its element pairs
@@ -778,30 +817,8 @@ Test(collide, a_fine_sheets_list_holds_every_pair_in_reach_but_its_rest_pairs)
 	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
 	plait_object_get_triangles(cloth, tri, triangles);
 	int first = mc->elements[0].v[0] - tri[0]; /* the cloth's first particle */
-	listing_tally tally = {listed, mc->pair_count, 0, 0, 0};
-	/* Every vertex against every triangle, every edge against every edge (pairs of edges that
-	 * two triangles share are tallied more than once, which changes no verdict). */
-	for (int t = 0; t < triangles; ++t) {
-		for (int i = 0; i < p->count; ++i) {
-			int v[4] = {i, first + tri[3 * t], first + tri[3 * t + 1], first + tri[3 * t + 2]};
-			if (v[0] != v[1] && v[0] != v[2] && v[0] != v[3]) {
-				tally_pair(&tally, p, PAIR_VERTEX_FACE, v);
-			}
-		}
-	}
-	for (int t = 0; t < triangles; ++t) {
-		for (int u = t; u < triangles; ++u) {
-			for (int i = 0; i < 3; ++i) {
-				for (int j = 0; j < 3; ++j) {
-					int v[4] = {first + tri[3 * t + i], first + tri[3 * t + (i + 1) % 3],
-					            first + tri[3 * u + j], first + tri[3 * u + (j + 1) % 3]};
-					if (v[0] != v[2] && v[0] != v[3] && v[1] != v[2] && v[1] != v[3]) {
-						tally_pair(&tally, p, PAIR_EDGE_EDGE, v);
-					}
-				}
-			}
-		}
-	}
+	listing_tally tally = {listed, mc->pair_count, 0, 0, 0, p};
+	visit_every_pair(tri, triangles, first, p->count, tally_listing, &tally);
 	cr_expect_gt(tally.expected, 1000, "only %d pairs came within reach", tally.expected);
 	cr_expect_eq(tally.missing, 0, "%d of %d pairs in reach not listed", tally.missing, tally.expected);
 	cr_expect_eq(tally.rest_listed, 0, "%d rest pairs listed", tally.rest_listed);
@@ -816,6 +833,7 @@ typedef struct short_tally {
 	const unsigned long long *keys; /* pair_key of each listed pair, sorted */
 	int count;
 	int in_contact, contact_missing, paths_meet, paths_missing;
+	const plait_particles *particles;
 } short_tally;
 
 static const contact_pair *listed_pair(const short_tally *tally, int type, const int *v)
@@ -863,6 +881,12 @@ static void tally_short_pair(short_tally *tally, const plait_particles *p, int t
 	}
 }
 
+static void tally_short(void *context, int type, const int *v)
+{
+	short_tally *tally = context;
+	tally_short_pair(tally, tally->particles, type, v);
+}
+
 /* Where vertices leave their paths every substep, lists serve only their own substep and reach
  * only as far as that needs (mesh_contact_listing.c): the pairs in contact now, pushing, and
  * those whose paths since the substep's start may have met. A fine sheet folded in two, whose
@@ -905,28 +929,8 @@ Test(collide, a_short_list_holds_the_pairs_in_contact_and_those_whose_paths_met)
 	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
 	plait_object_get_triangles(cloth, tri, triangles);
 	int first = mc->elements[0].v[0] - tri[0];
-	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0};
-	for (int t = 0; t < triangles; ++t) {
-		for (int i = 0; i < p->count; ++i) {
-			int v[4] = {i, first + tri[3 * t], first + tri[3 * t + 1], first + tri[3 * t + 2]};
-			if (v[0] != v[1] && v[0] != v[2] && v[0] != v[3]) {
-				tally_short_pair(&tally, p, PAIR_VERTEX_FACE, v);
-			}
-		}
-	}
-	for (int t = 0; t < triangles; ++t) {
-		for (int u = t; u < triangles; ++u) {
-			for (int i = 0; i < 3; ++i) {
-				for (int j = 0; j < 3; ++j) {
-					int v[4] = {first + tri[3 * t + i], first + tri[3 * t + (i + 1) % 3],
-					            first + tri[3 * u + j], first + tri[3 * u + (j + 1) % 3]};
-					if (v[0] != v[2] && v[0] != v[3] && v[1] != v[2] && v[1] != v[3]) {
-						tally_short_pair(&tally, p, PAIR_EDGE_EDGE, v);
-					}
-				}
-			}
-		}
-	}
+	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0, p};
+	visit_every_pair(tri, triangles, first, p->count, tally_short, &tally);
 	cr_expect_gt(tally.in_contact, 1000, "only %d pairs in contact", tally.in_contact);
 	cr_expect_gt(tally.paths_meet, 20, "only %d pairs' paths met", tally.paths_meet);
 	cr_expect_eq(tally.contact_missing, 0, "%d of %d pairs in contact not listed as contacts",
