@@ -123,11 +123,12 @@ static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *
  * `self` when the two trees are one. With pieces != NULL it does not descend below `depth`
  * pair splits: the node pairs it stops at (and the leaf pairs above that depth) go to pieces in
  * the order the full traversal would meet them, and their count is returned (-1 past
- * capacity). */
+ * capacity). With skip (self only), a node's pairs with itself are passed over when it says so. */
 static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
                     const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
-                    float margin, int start_a, int start_b, plait_element_pair_visitor *visit, void *context,
-                    int depth, int (*pieces)[2], int capacity)
+                    float margin, int start_a, int start_b, const plait_node_skip *skip,
+                    plait_element_pair_visitor *visit, void *context, int depth, int (*pieces)[2],
+                    int capacity)
 {
 	if (tree_a->node_count == 0 || tree_b->node_count == 0) {
 		return 0;
@@ -141,6 +142,9 @@ static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const
 		int level = stack[--top], nb = stack[--top], na = stack[--top];
 		const plait_tree_node *a = &tree_a->nodes[na], *b = &tree_b->nodes[nb];
 		bool same = self && na == nb;
+		if (same && skip != NULL && skip->skip(na, skip->context)) {
+			continue;
+		}
 		if (!same && !boxes_overlap(a->lower, a->upper, b->lower, b->upper, margin)) {
 			continue;
 		}
@@ -188,7 +192,16 @@ static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const
 void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                               plait_element_pair_visitor *visit, void *context)
 {
-	(void)traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, 0, 0, visit, context, 0, NULL, 0);
+	(void)traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, 0, 0, NULL, visit, context, 0, NULL,
+	               0);
+}
+
+void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                                       const plait_node_skip *skip, plait_element_pair_visitor *visit,
+                                       void *context)
+{
+	(void)traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, 0, 0, skip, visit, context, 0, NULL,
+	               0);
 }
 
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
@@ -196,23 +209,25 @@ void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const ve
                                       const vec3 *lower_b, const vec3 *upper_b, float margin,
                                       plait_element_pair_visitor *visit, void *context)
 {
-	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, 0, 0, visit, context, 0,
-	               NULL, 0);
+	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, 0, 0, NULL, visit,
+	               context, 0, NULL, 0);
 }
 
 int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
-                             float margin, int depth, int (*pieces)[2], int capacity)
+                             float margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
+                             int capacity)
 {
-	return traverse(tree_a, NULL, NULL, tree_b, NULL, NULL, self, margin, 0, 0, NULL, NULL, depth, pieces,
-	                capacity);
+	return traverse(tree_a, NULL, NULL, tree_b, NULL, NULL, self, margin, 0, 0, skip, NULL, NULL, depth,
+	                pieces, capacity);
 }
 
 void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3 *lower_a,
                                     const vec3 *upper_a, const plait_element_tree *tree_b,
                                     const vec3 *lower_b, const vec3 *upper_b, bool self, float margin,
-                                    const int piece[2], plait_element_pair_visitor *visit, void *context)
+                                    const plait_node_skip *skip, const int piece[2],
+                                    plait_element_pair_visitor *visit, void *context)
 {
-	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, self, margin, piece[0], piece[1],
+	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, self, margin, piece[0], piece[1], skip,
 	               visit, context, 0, NULL, 0);
 }
 

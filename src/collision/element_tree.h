@@ -40,6 +40,20 @@ typedef void plait_element_pair_visitor(int a, int b, void *context);
 void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                               plait_element_pair_visitor *visit, void *context);
 
+/* Self-traversals: skip(node, context) says whether the node's pairs with itself (all of them,
+ * down to its leaves) may be passed over. Called for each node whose pair with itself a
+ * traversal reaches (a piece's first node again), from several threads at once when pieces run
+ * side by side: it must answer the same each time. */
+typedef struct plait_node_skip {
+	bool (*skip)(int node, void *context);
+	void *context;
+} plait_node_skip;
+
+/* As plait_element_tree_pairs, passing over what skip says. */
+void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                                       const plait_node_skip *skip, plait_element_pair_visitor *visit,
+                                       void *context);
+
 /* As above between two trees: visit(a, b) with a an element of tree_a, b one of tree_b (each
  * in its own tree's numbering, boxes from its own arrays), for boxes within `margin` of each
  * other. */
@@ -60,12 +74,15 @@ void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower,
  * and returns how many; -1 when more than capacity. The pairs of all pieces, each traversed by
  * plait_element_tree_piece_pairs and taken in piece order, are the whole traversal's pairs in
  * its order. self and margin as for the two queries above (self: tree_b is tree_a, margin 0);
- * uses the node boxes of the last refit. */
+ * skip as for plait_element_tree_pairs_skipping (NULL: none); uses the node boxes of the last
+ * refit. */
 int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
-                             float margin, int depth, int (*pieces)[2], int capacity);
+                             float margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
+                             int capacity);
 void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3 *lower_a,
                                     const vec3 *upper_a, const plait_element_tree *tree_b,
                                     const vec3 *lower_b, const vec3 *upper_b, bool self, float margin,
-                                    const int piece[2], plait_element_pair_visitor *visit, void *context);
+                                    const plait_node_skip *skip, const int piece[2],
+                                    plait_element_pair_visitor *visit, void *context);
 
 #endif

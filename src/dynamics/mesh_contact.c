@@ -16,6 +16,8 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		}
 		sim->mesh_contacts = mc;
 		sim->mesh_contacts_dirty = true;
+		mc->cull_flat = true;
+		mc->patches_fitted_for = -1;
 	}
 	if (sim->mesh_contacts_dirty) {
 		mc->list_valid = false;
@@ -60,6 +62,8 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->touched);
 	plait_free(a, mc->members);
 	plait_free(a, mc->x_gather);
+	plait_free(a, mc->sweep_end);
+	plait_free(a, mc->sweep_motion);
 	plait_free(a, mc->motion);
 	plait_free(a, mc->around);
 	plait_free(a, mc->guard);

@@ -4,6 +4,7 @@
 #include "dynamics/mesh_contact_internal.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allocator *a)
 {
@@ -27,6 +28,7 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	plait_free(a, mc->upper);
 	for (int k = 0; k < mc->object_count; ++k) {
 		plait_element_tree_destroy(&mc->objects[k].tree, a);
+		plait_flat_patches_destroy(&mc->objects[k].patches, a);
 	}
 	plait_free(a, mc->objects);
 	plait_free(a, mc->features);
@@ -67,6 +69,22 @@ static bool material_collides(const plait_sim *sim, int material)
 }
 
 static bool build_rest_pairs(plait_sim *sim, plait_mesh_contacts *mc);
+
+/* A self-colliding cloth's flat patches (collision/flat_patches.h), from its tree. */
+static bool build_patches(plait_sim *sim, plait_mesh_contacts *mc, collision_object *o)
+{
+	const plait_allocator *a = &sim->allocator;
+	int(*triangles)[3] = plait_alloc_zero(a, (size_t)o->count, sizeof *triangles);
+	if (triangles == NULL) {
+		return false;
+	}
+	for (int t = 0; t < o->count; ++t) {
+		memcpy(triangles[t], mc->elements[o->first + t].v, sizeof triangles[t]);
+	}
+	bool ok = plait_flat_patches_build(&o->patches, a, &o->tree, (const int(*)[3])triangles, o->count);
+	plait_free(a, triangles);
+	return ok;
+}
 
 bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 {
@@ -143,7 +161,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[surface->material];
 			mc->objects[mc->object_count++] = (collision_object){
-			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1};
+			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1, {0}};
 			for (int t = 0; t < surface->shape->triangle_count; ++t, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 3;
@@ -170,7 +188,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[chain->material];
 			mc->objects[mc->object_count++] =
-			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}, -1};
+			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}, -1, {0}};
 			for (int k = 0; k + 1 < chain->count; ++k, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 2;
@@ -188,7 +206,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				if (last == NULL || last->material != p->material[i] || last->first + last->count != e) {
 					/* Loose points never meet their own kind here (particle pairs do). */
 					mc->objects[mc->object_count++] =
-					    (collision_object){e, 0, p->material[i], false, {0}, -1};
+					    (collision_object){e, 0, p->material[i], false, {0}, -1, {0}};
 					last = &mc->objects[mc->object_count - 1];
 				}
 				last->count += 1;
@@ -226,6 +244,9 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 		for (int k = 0; k < mc->object_count && ok; ++k) {
 			collision_object *o = &mc->objects[k];
 			ok = plait_element_tree_build(&o->tree, a, centres + o->first, o->count);
+			if (ok && o->self && mc->elements[o->first].size == 3) {
+				ok = build_patches(sim, mc, o);
+			}
 		}
 		ok = ok && build_rest_pairs(sim, mc);
 		int objects = mc->object_count;
@@ -259,12 +280,16 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->touched);
 	plait_free(a, mc->members);
 	plait_free(a, mc->x_gather);
+	plait_free(a, mc->sweep_end);
+	plait_free(a, mc->sweep_motion);
 	plait_free(a, mc->motion);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	plait_free(a, mc->around);
 	mc->around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
 	mc->x_gather = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->sweep_end = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->sweep_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->object_of = plait_alloc_zero(a, (size_t)count, sizeof(int));
@@ -273,7 +298,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->touched = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->members = plait_alloc_zero(a, (size_t)count, sizeof *mc->members);
 	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
-	    mc->motion == NULL || mc->guard == NULL || mc->object_of == NULL || mc->around == NULL) {
+	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->motion == NULL || mc->guard == NULL ||
+	    mc->object_of == NULL || mc->around == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

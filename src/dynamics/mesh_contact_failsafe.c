@@ -437,6 +437,16 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 		return pass.hits;
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, true, distance);
+	if (mc->cull_flat) {
+		/* The substep's own paths, start to now: a patch flat all along them crosses nothing. */
+		const plait_particles *p = &sim->particles;
+		for (int i = 0; i < p->count; ++i) {
+			mc->sweep_end[i] = p->point[i].x;
+			mc->sweep_motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
+		}
+		plait_patch_paths paths = {mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
+		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_FAILSAFE);
+	}
 	int before = pass.swept;
 	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {
 		plait_mesh_contacts_traverse_objects(mc, &pass);

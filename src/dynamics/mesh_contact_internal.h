@@ -14,6 +14,7 @@
 #define PLAIT_DYNAMICS_MESH_CONTACT_INTERNAL_H
 
 #include "collision/element_tree.h"
+#include "collision/flat_patches.h"
 #include "dynamics/mesh_contact.h"
 #include "topology/topology.h"
 
@@ -51,6 +52,9 @@ typedef struct collision_object {
 	bool self;
 	plait_element_tree tree;
 	int features; /* a collider's: index of its first element's collider_features, or -1 */
+	/* A self-colliding cloth's patches that cannot touch themselves (refitted at each gather;
+	 * node_count 0 when it has none). */
+	plait_flat_patches patches;
 } collision_object;
 
 /* A rigid mesh collider's corners and edges (plait_collider.first). Each element's own vertices
@@ -202,6 +206,14 @@ typedef struct plait_mesh_contacts {
 	vec3 *x_gather;
 	vec3 *motion; /* per particle: its motion over the gather's substep, start to gather */
 	float *guard; /* per particle: how far it may stray from that path */
+	/* The paths the flat patches were last fitted to, and for which traversal (STAGE_GATHER:
+	 * the list's paths above, over the substeps it serves; STAGE_FAILSAFE: the substep's paths,
+	 * sweep_end and sweep_motion per particle). cull_flat: whether traversals pass over flat
+	 * patches' pairs with themselves (on unless a test compares). */
+	plait_patch_paths patch_paths;
+	int patches_fitted_for; /* a stage, or -1 */
+	bool cull_flat;
+	vec3 *sweep_end, *sweep_motion;
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
 	long listings;                      /* gathers since the stage was made */
 	int *object_of;                     /* per particle: its collision object, or -1 */
@@ -356,6 +368,16 @@ bool plait_mesh_contacts_paths_apart(int type, const vec3 *start, const vec3 *en
 /* The element trees' callback for an object_pass: element pair (a, b) of its objects, visited
  * as its pair_pass's stage asks. */
 void plait_mesh_contacts_visit_object_elements(int a, int b, void *context);
+
+/* A self traversal's skip over flat patches (plait_mesh_contacts_culls_flat). */
+typedef struct flat_skip {
+	const plait_flat_patches *patches;
+	const plait_patch_paths *paths;
+} flat_skip;
+bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pass *pass);
+/* Fits every object's flat patches to `paths` for the traversals of stage `of`. */
+void plait_mesh_contacts_fit_patches(plait_mesh_contacts *mc, const plait_patch_paths *paths, stage of);
+bool plait_mesh_contacts_skip_flat(int node, void *context);
 
 /* mesh_contact_features.c */
 

@@ -95,6 +95,30 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 	}
 }
 
+/* Whether the traversal of `pass` passes over flat patches' pairs with themselves: the gather's,
+ * once the patches are fitted to its paths. Pairs within a patch that stays flat over the paths
+ * cannot touch or cross (collision/flat_patches.h), and none of its vertices can leave its path
+ * without being re-listed around (list_holds), which does not skip. */
+bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pass *pass)
+{
+	return mc->cull_flat && mc->patches_fitted_for == (int)pass->stage && !pass->around_only;
+}
+
+void plait_mesh_contacts_fit_patches(plait_mesh_contacts *mc, const plait_patch_paths *paths, stage of)
+{
+	mc->patch_paths = *paths;
+	mc->patches_fitted_for = (int)of;
+	for (int k = 0; k < mc->object_count; ++k) {
+		plait_flat_patches_fit(&mc->objects[k].patches, &mc->objects[k].tree, &mc->patch_paths);
+	}
+}
+
+bool plait_mesh_contacts_skip_flat(int node, void *context)
+{
+	const flat_skip *flat = context;
+	return plait_flat_patches_flat(flat->patches, node, flat->paths);
+}
+
 /* Whether objects a < b meet in mesh contacts. */
 bool plait_mesh_contacts_objects_meet(const plait_sim *sim, const plait_mesh_contacts *mc, int a, int b)
 {
@@ -130,7 +154,11 @@ void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pa
 		vec3 *la = mc->lower + oa->first, *ua = mc->upper + oa->first;
 		object_pass self = {pass, oa->first, oa->first};
 		if (oa->self) {
-			plait_element_tree_pairs(&oa->tree, la, ua, plait_mesh_contacts_visit_object_elements, &self);
+			flat_skip flat = {&oa->patches, &mc->patch_paths};
+			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
+			plait_element_tree_pairs_skipping(&oa->tree, la, ua,
+			                                  plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
+			                                  plait_mesh_contacts_visit_object_elements, &self);
 		}
 		for (int b = a + 1; b < mc->object_count; ++b) {
 			if (!plait_mesh_contacts_objects_meet(sim, mc, a, b)) {
@@ -231,6 +259,11 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 		}
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
+	if (mc->cull_flat) {
+		/* Where each vertex may be while the list serves (as list_holds checks). */
+		plait_patch_paths paths = {mc->x_gather, mc->motion, mc->guard, 1.0f, (float)mc->list_serves};
+		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_GATHER);
+	}
 	pair_pass pass = {.sim = sim,
 	                  .mc = mc,
 	                  .stage = STAGE_GATHER,

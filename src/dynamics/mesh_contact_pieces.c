@@ -64,10 +64,13 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	const collision_object *oa = &mc->objects[piece->a], *ob = &mc->objects[piece->b];
 	bool self = piece->a == piece->b;
 	object_pass o = {pass, oa->first, ob->first};
+	flat_skip flat = {&oa->patches, &mc->patch_paths};
+	plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
 	plait_element_tree_piece_pairs(&oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree,
 	                               mc->lower + ob->first, mc->upper + ob->first, self,
 	                               self ? 0.0f
 	                                    : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
+	                               self && plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
 	                               piece->node, plait_mesh_contacts_visit_object_elements, &o);
 }
 
@@ -106,10 +109,13 @@ bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *m
 				continue;
 			}
 			pair_pass margin_pass = {.stage = of};
+			flat_skip flat = {&oa->patches, &mc->patch_paths};
+			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
 			int n = plait_element_tree_split(
 			    &oa->tree, &ob->tree, a == b,
-			    a == b ? 0.0f : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b), PIECE_DEPTH,
-			    nodes, MAX_PIECES - count);
+			    a == b ? 0.0f : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b),
+			    a == b && plait_mesh_contacts_culls_flat(mc, &margin_pass) ? &skip : NULL, PIECE_DEPTH, nodes,
+			    MAX_PIECES - count);
 			fits = n >= 0;
 			for (int k = 0; k < n; ++k) {
 				gather_piece piece = {a, b, {nodes[k][0], nodes[k][1]}};

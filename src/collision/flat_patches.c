@@ -1,0 +1,529 @@
+#include "collision/flat_patches.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "topology/topology.h"
+
+/* Nodes with fewer triangles are never tested: their pairs with themselves cost less to walk. */
+#define FLAT_MIN_TRIANGLES 16
+
+/* A patch is flat below this cone angle (radians, about 85 degrees): the rest of a right angle
+ * holds the cones' rounding many times over. */
+#define FLAT_ANGLE 1.48f
+
+/* No cone under a right angle. */
+#define NO_CONE 4.0f
+
+#define HALF_PI 1.5707963f
+
+void plait_flat_patches_destroy(plait_flat_patches *fp, const plait_allocator *allocator)
+{
+	plait_free(allocator, fp->triangles);
+	plait_free(allocator, fp->contour_first);
+	plait_free(allocator, fp->contour);
+	plait_free(allocator, fp->notch_first);
+	plait_free(allocator, fp->notch);
+	plait_free(allocator, fp->patch_cone);
+	memset(fp, 0, sizeof *fp);
+}
+
+/* ---- Building the patches -------------------------------------------------------------------- */
+
+/* Scratch of the build. */
+typedef struct patch_build {
+	const plait_element_tree *tree;
+	const int (*triangles)[3];
+	int *twin;        /* per triangle corner (3 t + k): the corner across its edge; -1 border, -2 odd */
+	int *position;    /* per triangle: its index in tree->order */
+	int *begin, *end; /* per node: its range of tree->order */
+	int *notch_stamp; /* per triangle: node + 1 when a notch of that node */
+	int *visit_stamp; /* per triangle: node + 1 when reached by the connectivity walk */
+	int *stack;       /* per triangle */
+	int *out_stamp, *out_next; /* per particle: the border edge leaving it (node + 1 when set) */
+	int *seen_stamp;           /* per particle */
+	int *contour, contour_count, contour_capacity;
+	int *notch, notch_count, notch_capacity;
+	const plait_allocator *allocator;
+	bool failed;
+} patch_build;
+
+static bool push(patch_build *b, int **array, int *count, int *capacity, int value)
+{
+	if (*count == *capacity) {
+		int grown = *capacity < 1024 ? 1024 : 2 * *capacity;
+		int *bigger = plait_alloc_grow(b->allocator, *array, sizeof(int), *count, grown);
+		if (bigger == NULL) {
+			b->failed = true;
+			return false;
+		}
+		*array = bigger;
+		*capacity = grown;
+	}
+	(*array)[(*count)++] = value;
+	return true;
+}
+
+/* Each corner's twin: the corner of the other triangle on its edge, run the other way. */
+static bool find_twins(patch_build *b, int count)
+{
+	plait_triangle_edge *edges = plait_alloc_zero(b->allocator, (size_t)(3 * count), sizeof *edges);
+	if (edges == NULL) {
+		return false;
+	}
+	for (int t = 0; t < count; ++t) {
+		for (int k = 0; k < 3; ++k) {
+			int i = b->triangles[t][k], j = b->triangles[t][(k + 1) % 3];
+			edges[3 * t + k] = (plait_triangle_edge){i < j ? i : j, i < j ? j : i, t, k};
+			b->twin[3 * t + k] = i == j ? -2 : -1;
+		}
+	}
+	plait_sort_triangle_edges(edges, 3 * count);
+	for (int first = 0; first < 3 * count;) {
+		int last = first + 1;
+		while (last < 3 * count && edges[last].low == edges[first].low &&
+		       edges[last].high == edges[first].high) {
+			++last;
+		}
+		if (last - first == 2) {
+			const plait_triangle_edge *e0 = &edges[first], *e1 = &edges[first + 1];
+			int c0 = 3 * e0->triangle + e0->corner, c1 = 3 * e1->triangle + e1->corner;
+			bool opposite = (b->triangles[e0->triangle][e0->corner] == e0->low) !=
+			                (b->triangles[e1->triangle][e1->corner] == e1->low);
+			if (b->twin[c0] == -1 && b->twin[c1] == -1) {
+				b->twin[c0] = opposite ? c1 : -2;
+				b->twin[c1] = opposite ? c0 : -2;
+			}
+		} else if (last - first > 2) {
+			for (int k = first; k < last; ++k) {
+				b->twin[3 * edges[k].triangle + edges[k].corner] = -2; /* more than two triangles */
+			}
+		}
+		first = last;
+	}
+	plait_free(b->allocator, edges);
+	return true;
+}
+
+static bool in_node(const patch_build *b, int node, int t)
+{
+	return b->position[t] >= b->begin[node] && b->position[t] < b->end[node];
+}
+
+static bool in_patch(const patch_build *b, int node, int t)
+{
+	return in_node(b, node, t) || b->notch_stamp[t] == node + 1;
+}
+
+/* The patch's k-th triangle: the node's own, then its notches from notch[notch_start]. */
+static int patch_triangle(const patch_build *b, int node, int notch_start, int k)
+{
+	int own = b->end[node] - b->begin[node];
+	return k < own ? b->tree->order[b->begin[node] + k] : b->notch[notch_start + k - own];
+}
+
+/* Node `node`'s notches and contour appended to b's lists; false (and nothing appended) when its
+ * patch is no disk. */
+static bool build_patch(patch_build *b, int node)
+{
+	int stamp = node + 1, notch_start = b->notch_count, contour_start = b->contour_count;
+	/* Notches: triangles outside sharing two edges with the node's. */
+	for (int k = b->begin[node]; k < b->end[node]; ++k) {
+		int t = b->tree->order[k];
+		for (int c = 0; c < 3; ++c) {
+			int across = b->twin[3 * t + c];
+			if (across == -2) {
+				return false;
+			}
+			int u = across / 3;
+			if (across < 0 || in_node(b, node, u) || b->notch_stamp[u] == stamp) {
+				continue;
+			}
+			int shared = 0;
+			for (int m = 0; m < 3; ++m) {
+				int other = b->twin[3 * u + m];
+				shared += other >= 0 && in_node(b, node, other / 3);
+			}
+			if (shared >= 2) {
+				b->notch_stamp[u] = stamp;
+				if (!push(b, &b->notch, &b->notch_count, &b->notch_capacity, u)) {
+					return false;
+				}
+			}
+		}
+	}
+	int faces = b->end[node] - b->begin[node] + (b->notch_count - notch_start);
+	/* Border edges (each vertex leaves by one at most), vertices. */
+	int border = 0, vertices = 0, start = -1;
+	bool ok = true;
+	for (int k = 0; k < faces && ok; ++k) {
+		int t = patch_triangle(b, node, notch_start, k);
+		for (int c = 0; c < 3 && ok; ++c) {
+			int across = b->twin[3 * t + c], v = b->triangles[t][c];
+			ok = across != -2;
+			if (b->seen_stamp[v] != stamp) {
+				b->seen_stamp[v] = stamp;
+				vertices += 1;
+			}
+			if (ok && (across < 0 || !in_patch(b, node, across / 3))) {
+				ok = b->out_stamp[v] != stamp;
+				b->out_stamp[v] = stamp;
+				b->out_next[v] = b->triangles[t][(c + 1) % 3];
+				border += 1;
+				start = v;
+			}
+		}
+	}
+	/* A disk: one piece, Euler characteristic 1, one border loop through every border edge. */
+	int edges = (3 * faces + border) / 2;
+	ok = ok && border > 0 && vertices - edges + faces == 1;
+	for (int v = start, steps = 0; ok; ++steps) {
+		if (steps == border) {
+			ok = v == start;
+			break;
+		}
+		if (b->out_stamp[v] != stamp || (steps > 0 && v == start) ||
+		    !push(b, &b->contour, &b->contour_count, &b->contour_capacity, v)) {
+			ok = false;
+			break;
+		}
+		v = b->out_next[v];
+	}
+	if (ok) {
+		int top = 0, reached = 1, first = patch_triangle(b, node, notch_start, 0);
+		b->visit_stamp[first] = stamp;
+		b->stack[top++] = first;
+		while (top > 0) {
+			int t = b->stack[--top];
+			for (int c = 0; c < 3; ++c) {
+				int across = b->twin[3 * t + c];
+				if (across >= 0 && in_patch(b, node, across / 3) && b->visit_stamp[across / 3] != stamp) {
+					b->visit_stamp[across / 3] = stamp;
+					b->stack[top++] = across / 3;
+					reached += 1;
+				}
+			}
+		}
+		ok = reached == faces;
+	}
+	if (!ok) {
+		b->contour_count = contour_start;
+		b->notch_count = notch_start;
+	}
+	return ok;
+}
+
+bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *allocator,
+                              const plait_element_tree *tree, const int (*triangles)[3], int triangle_count)
+{
+	plait_flat_patches_destroy(fp, allocator);
+	int nodes = tree->node_count, count = triangle_count;
+	if (nodes == 0 || count == 0) {
+		return true;
+	}
+	int particles = 0;
+	for (int t = 0; t < count; ++t) {
+		for (int k = 0; k < 3; ++k) {
+			particles = triangles[t][k] >= particles ? triangles[t][k] + 1 : particles;
+		}
+	}
+	patch_build b = {.tree = tree, .triangles = triangles, .allocator = allocator};
+	b.twin = plait_alloc_zero(allocator, (size_t)(3 * count), sizeof(int));
+	b.position = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
+	b.begin = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
+	b.end = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
+	b.notch_stamp = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
+	b.visit_stamp = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
+	b.stack = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
+	b.out_stamp = plait_alloc_zero(allocator, (size_t)particles, sizeof(int));
+	b.out_next = plait_alloc_zero(allocator, (size_t)particles, sizeof(int));
+	b.seen_stamp = plait_alloc_zero(allocator, (size_t)particles, sizeof(int));
+	fp->triangles = plait_alloc_zero(allocator, (size_t)count, sizeof *fp->triangles);
+	fp->contour_first = plait_alloc_zero(allocator, (size_t)nodes + 1, sizeof(int));
+	fp->notch_first = plait_alloc_zero(allocator, (size_t)nodes + 1, sizeof(int));
+	fp->patch_cone = plait_alloc_zero(allocator, (size_t)nodes, sizeof(plait_cone));
+	bool ok = b.twin != NULL && b.position != NULL && b.begin != NULL && b.end != NULL &&
+	          b.notch_stamp != NULL && b.visit_stamp != NULL && b.stack != NULL && b.out_stamp != NULL &&
+	          b.out_next != NULL && b.seen_stamp != NULL && fp->triangles != NULL &&
+	          fp->contour_first != NULL && fp->notch_first != NULL && fp->patch_cone != NULL;
+	if (ok) {
+		memcpy(fp->triangles, triangles, sizeof *fp->triangles * (size_t)count);
+		ok = find_twins(&b, count);
+	}
+	if (ok) {
+		for (int k = 0; k < count; ++k) {
+			b.position[tree->order[k]] = k;
+		}
+		/* Children come after their parents. */
+		for (int n = nodes - 1; n >= 0; --n) {
+			const plait_tree_node *node = &tree->nodes[n];
+			b.begin[n] = node->count > 0 ? node->first : b.begin[node->first];
+			b.end[n] = node->count > 0 ? node->first + node->count : b.end[node->first + 1];
+		}
+		for (int n = 0; n < nodes && !b.failed; ++n) {
+			fp->contour_first[n] = b.contour_count;
+			fp->notch_first[n] = b.notch_count;
+			if (b.end[n] - b.begin[n] >= FLAT_MIN_TRIANGLES) {
+				(void)build_patch(&b, n);
+			}
+		}
+		fp->contour_first[nodes] = b.contour_count;
+		fp->notch_first[nodes] = b.notch_count;
+		ok = !b.failed;
+	}
+	plait_free(allocator, b.twin);
+	plait_free(allocator, b.position);
+	plait_free(allocator, b.begin);
+	plait_free(allocator, b.end);
+	plait_free(allocator, b.notch_stamp);
+	plait_free(allocator, b.visit_stamp);
+	plait_free(allocator, b.stack);
+	plait_free(allocator, b.out_stamp);
+	plait_free(allocator, b.out_next);
+	plait_free(allocator, b.seen_stamp);
+	fp->contour = b.contour;
+	fp->notch = b.notch;
+	if (!ok) {
+		plait_flat_patches_destroy(fp, allocator);
+		return false;
+	}
+	fp->node_count = nodes;
+	fp->triangle_count = count;
+	return true;
+}
+
+/* ---- Cones ------------------------------------------------------------------------------------ */
+
+/* The arctangent of x in [0, 1] by a polynomial (error under 2e-6 radians; tests/test_flat_patches.c
+ * checks); every angle built from it gets ANGLE_SLACK added, well above that and rounding. */
+static float atan_unit(float x)
+{
+	float x2 = x * x;
+	return x * (0.99997726f +
+	            x2 * (-0.33262347f +
+	                  x2 * (0.19354346f + x2 * (-0.11643287f + x2 * (0.05265332f + x2 * -0.01172120f)))));
+}
+
+#define ANGLE_SLACK 1e-4f
+
+/* atan2(y, x) for y >= 0, in [0, pi]. */
+static float angle_of(float y, float x)
+{
+	float ax = fabsf(x);
+	if (!(y > 0.0f) && !(ax > 0.0f)) {
+		return 0.0f;
+	}
+	float angle = ax >= y ? atan_unit(y / ax) : HALF_PI - atan_unit(ax / y);
+	return x < 0.0f ? 2.0f * HALF_PI - angle : angle;
+}
+
+float plait_flat_patches_atan2(float y, float x)
+{
+	return angle_of(y, x);
+}
+
+static plait_cone no_cone(void)
+{
+	return (plait_cone){{0.0f, 0.0f, 1.0f}, NO_CONE};
+}
+
+static float angle_between(vec3 a, vec3 b)
+{
+	return angle_of(v3_length(v3_cross(a, b)), v3_dot(a, b));
+}
+
+plait_cone plait_cone_merge(plait_cone a, plait_cone b)
+{
+	if (a.angle >= HALF_PI || b.angle >= HALF_PI) {
+		return no_cone();
+	}
+	float between = angle_between(a.axis, b.axis) + ANGLE_SLACK;
+	if (between + b.angle <= a.angle) {
+		return a;
+	}
+	if (between + a.angle <= b.angle) {
+		return b;
+	}
+	float angle = 0.5f * (between + a.angle + b.angle);
+	if (angle >= HALF_PI) {
+		return no_cone();
+	}
+	/* An axis between the two (normalised lerp toward the smallest cone's), then the angle that
+	 * holds both cones round it, measured. */
+	float t = (angle - a.angle) / between;
+	vec3 axis = v3_add(v3_scale(a.axis, 1.0f - t), v3_scale(b.axis, t));
+	float length = v3_length(axis);
+	if (!(length > 1e-6f)) {
+		return no_cone();
+	}
+	axis = v3_scale(axis, 1.0f / length);
+	float reach = fmaxf(angle_between(axis, a.axis) + a.angle, angle_between(axis, b.axis) + b.angle);
+	return (plait_cone){axis, reach + ANGLE_SLACK};
+}
+
+static float guard(const plait_patch_paths *paths, int i)
+{
+	return paths->guard != NULL ? paths->guard[i] : 0.0f;
+}
+
+static vec3 path_start(const plait_patch_paths *paths, int i)
+{
+	return v3_mul_add(paths->at[i], -paths->back, paths->motion[i]);
+}
+
+static vec3 path_end(const plait_patch_paths *paths, int i)
+{
+	return v3_mul_add(paths->at[i], paths->on, paths->motion[i]);
+}
+
+/* A triangle's normal over the paths: with its vertices moving straight it is
+ * n(s) = sum B_k(s) N_k (quadratic Bernstein basis), so inside the cone of N_0, N_1, N_2; the
+ * guards add a vector of length at most rho to it. */
+typedef struct triangle_normals {
+	vec3 n[3];
+	float rho;
+} triangle_normals;
+
+static triangle_normals triangle_normals_of(const plait_patch_paths *paths, const int *v)
+{
+	vec3 a[3], b[3];
+	for (int k = 0; k < 3; ++k) {
+		a[k] = path_start(paths, v[k]);
+		b[k] = path_end(paths, v[k]);
+	}
+	vec3 e1a = v3_sub(a[1], a[0]), e2a = v3_sub(a[2], a[0]);
+	vec3 e1b = v3_sub(b[1], b[0]), e2b = v3_sub(b[2], b[0]);
+	triangle_normals t = {{v3_cross(e1a, e2a), v3_scale(v3_add(v3_cross(e1a, e2b), v3_cross(e1b, e2a)), 0.5f),
+	                       v3_cross(e1b, e2b)},
+	                      0.0f};
+	float e1 = fmaxf(v3_length(e1a), v3_length(e1b)), e2 = fmaxf(v3_length(e2a), v3_length(e2b));
+	float g0 = guard(paths, v[0]), s1 = g0 + guard(paths, v[1]), s2 = g0 + guard(paths, v[2]);
+	/* (e1 + d1) x (e2 + d2) - e1 x e2, with |d1| <= s1, |d2| <= s2; and the rounding. */
+	t.rho = s1 * e2 + e1 * s2 + s1 * s2 + 1e-6f * e1 * e2;
+	return t;
+}
+
+/* The cone round `axis` (unit) of some triangles' normals over the paths. Each normal has an
+ * along-axis part of at least m (its least coefficient's) and a part across at most tan(widest)
+ * times that, before the guards' rho: tan of its angle is at most (m tan + rho) / (m - rho). */
+static plait_cone cone_round(vec3 axis, const triangle_normals *t, int count)
+{
+	float widest = 0.0f; /* tan */
+	for (int k = 0; k < count; ++k) {
+		for (int m = 0; m < 3; ++m) {
+			float along = v3_dot(t[k].n[m], axis);
+			if (!(along > 0.0f)) {
+				return no_cone(); /* at or past a right angle (or the triangle collapses) */
+			}
+			widest = fmaxf(widest, v3_length(v3_cross(t[k].n[m], axis)) / along);
+		}
+	}
+	float tangent = 0.0f;
+	for (int k = 0; k < count; ++k) {
+		float least = fminf(v3_dot(t[k].n[0], axis), fminf(v3_dot(t[k].n[1], axis), v3_dot(t[k].n[2], axis)));
+		if (!(t[k].rho < least)) {
+			return no_cone();
+		}
+		tangent = fmaxf(tangent, (least * widest + t[k].rho) / (least - t[k].rho));
+	}
+	return (plait_cone){axis, angle_of(tangent, 1.0f) + ANGLE_SLACK};
+}
+
+/* The cone of `count` triangles (at most a leaf's) round their normals' mean. */
+static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
+                                 int count)
+{
+	triangle_normals t[8];
+	if (count > 8) {
+		int half = count / 2;
+		return plait_cone_merge(triangles_cone(paths, triangles, which, half),
+		                        triangles_cone(paths, triangles, which + half, count - half));
+	}
+	vec3 sum = {0.0f, 0.0f, 0.0f};
+	for (int k = 0; k < count; ++k) {
+		t[k] = triangle_normals_of(paths, triangles[which[k]]);
+		sum = v3_add(sum, v3_add(t[k].n[0], v3_add(t[k].n[1], t[k].n[2])));
+	}
+	float length = v3_length(sum);
+	if (!(length > 0.0f)) {
+		return no_cone();
+	}
+	return cone_round(v3_scale(sum, 1.0f / length), t, count);
+}
+
+void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tree,
+                            const plait_patch_paths *paths)
+{
+	for (int n = fp->node_count - 1; n >= 0; --n) {
+		const plait_tree_node *node = &tree->nodes[n];
+		fp->patch_cone[n] =
+		    node->count > 0 ? triangles_cone(paths, (const int(*)[3])fp->triangles, tree->order + node->first,
+		                                     node->count)
+		                    : plait_cone_merge(fp->patch_cone[node->first], fp->patch_cone[node->first + 1]);
+	}
+}
+
+/* ---- The contour ------------------------------------------------------------------------------ */
+
+bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait_patch_paths *paths)
+{
+	if (fp->node_count == 0 || fp->patch_cone[node].angle >= FLAT_ANGLE) {
+		return false;
+	}
+	const int *contour = fp->contour + fp->contour_first[node];
+	int count = fp->contour_first[node + 1] - fp->contour_first[node];
+	if (count < 3) {
+		return false;
+	}
+	plait_cone cone = fp->patch_cone[node];
+	for (int k = fp->notch_first[node]; k < fp->notch_first[node + 1] && cone.angle < FLAT_ANGLE; ++k) {
+		cone =
+		    plait_cone_merge(cone, triangles_cone(paths, (const int(*)[3])fp->triangles, &fp->notch[k], 1));
+	}
+	if (cone.angle >= FLAT_ANGLE) {
+		return false;
+	}
+	vec3 d = cone.axis;
+	/* The centre c: the contour's mean, moving straight like its vertices (no guard: it is only
+	 * a reference point). */
+	vec3 ca = {0.0f, 0.0f, 0.0f}, cb = ca, c0 = ca;
+	for (int k = 0; k < count; ++k) {
+		ca = v3_add(ca, path_start(paths, contour[k]));
+		cb = v3_add(cb, path_end(paths, contour[k]));
+		c0 = v3_add(c0, paths->at[contour[k]]);
+	}
+	float inverse = 1.0f / (float)count;
+	ca = v3_scale(ca, inverse);
+	cb = v3_scale(cb, inverse);
+	c0 = v3_scale(c0, inverse);
+	/* A direction across d, to count the contour's turns round c at the gather. */
+	vec3 across = fabsf(d.x) < 0.6f ? v3(1.0f, 0.0f, 0.0f) : v3(0.0f, 1.0f, 0.0f);
+	vec3 side = v3_cross(d, across);
+	int crossings = 0;
+	int i = contour[count - 1];
+	vec3 pa = v3_sub(path_start(paths, i), ca), pb = v3_sub(path_end(paths, i), cb);
+	float p_side = v3_dot(v3_sub(paths->at[i], c0), side);
+	for (int k = 0; k < count; ++k) {
+		int j = contour[k];
+		vec3 qa = v3_sub(path_start(paths, j), ca), qb = v3_sub(path_end(paths, j), cb);
+		/* Edge i-j turns round c the way of d throughout: d . (p x q), quadratic in time, by its
+		 * Bernstein coefficients, less what the guards may take off it. */
+		float o0 = v3_dot(d, v3_cross(pa, qa)), o2 = v3_dot(d, v3_cross(pb, qb));
+		float o1 = 0.5f * v3_dot(d, v3_add(v3_cross(pa, qb), v3_cross(pb, qa)));
+		float p = fmaxf(v3_length(pa), v3_length(pb)), q = fmaxf(v3_length(qa), v3_length(qb));
+		float gi = guard(paths, i), gj = guard(paths, j);
+		float loss = gi * q + p * gj + gi * gj + 1e-6f * p * q;
+		if (!(fminf(o0, fminf(o1, o2)) > loss)) {
+			return false;
+		}
+		float q_side = v3_dot(v3_sub(paths->at[j], c0), side);
+		crossings += p_side < 0.0f && q_side >= 0.0f;
+		i = j;
+		pa = qa;
+		pb = qb;
+		p_side = q_side;
+	}
+	/* Every edge turns forward round c, so the contour winds round it a whole number of times,
+	 * the same all along the paths: once is a star-shaped loop. */
+	return crossings == 1;
+}
