@@ -1,0 +1,345 @@
+/* collision/flat_patches.h: the patches of a cloth that cannot touch themselves, whose pairs with
+ * themselves the gather passes over. A patch taken as flat wrongly is a contact or a crossing
+ * missed, so these check that what can meet itself is never flat (a fold, a spiral ramp whose
+ * normals all agree, a patch that turns over between the ends of its paths, guards wide enough
+ * to fold it), and that a cloth lying smooth is. */
+#include <criterion/criterion.h>
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "collision/element_tree.h"
+#include "collision/flat_patches.h"
+#include "test_support.h"
+
+static const plait_allocator heap = {NULL, NULL, NULL};
+
+/* A grid of nx x ny vertices over the unit square, two triangles a quad, in the XZ plane, its
+ * triangles facing +y; with its tree and patches. */
+typedef struct patch_mesh {
+	int nx, ny, vertex_count, triangle_count;
+	vec3 *x;
+	int (*triangles)[3];
+	plait_element_tree tree;
+	plait_flat_patches patches;
+} patch_mesh;
+
+static void build(patch_mesh *m)
+{
+	vec3 *centres = malloc(sizeof *centres * (size_t)m->triangle_count);
+	for (int t = 0; t < m->triangle_count; ++t) {
+		const int *v = m->triangles[t];
+		centres[t] = v3_scale(v3_add(m->x[v[0]], v3_add(m->x[v[1]], m->x[v[2]])), 1.0f / 3.0f);
+	}
+	cr_assert(plait_element_tree_build(&m->tree, &heap, centres, m->triangle_count));
+	cr_assert(plait_flat_patches_build(&m->patches, &heap, &m->tree, (const int(*)[3])m->triangles,
+	                                   m->triangle_count));
+	free(centres);
+}
+
+static patch_mesh grid(int nx, int ny)
+{
+	patch_mesh m = {nx, ny, nx * ny, 2 * (nx - 1) * (ny - 1), NULL, NULL, {0}, {0}};
+	m.x = malloc(sizeof *m.x * (size_t)m.vertex_count);
+	m.triangles = malloc(sizeof *m.triangles * (size_t)m.triangle_count);
+	for (int j = 0; j < ny; ++j) {
+		for (int i = 0; i < nx; ++i) {
+			m.x[j * nx + i] = v3((float)i / (float)(nx - 1), 0.0f, (float)j / (float)(ny - 1));
+		}
+	}
+	int t = 0;
+	for (int j = 0; j + 1 < ny; ++j) {
+		for (int i = 0; i + 1 < nx; ++i) {
+			int a = j * nx + i, b = a + 1, c = a + nx + 1, d = a + nx;
+			/* (a, d, c) faces +y: (d - a) x (c - a) = z x (x + z) = +y. */
+			m.triangles[t][0] = a;
+			m.triangles[t][1] = d;
+			m.triangles[t++][2] = c;
+			m.triangles[t][0] = a;
+			m.triangles[t][1] = c;
+			m.triangles[t++][2] = b;
+		}
+	}
+	build(&m);
+	return m;
+}
+
+static void mesh_free(patch_mesh *m)
+{
+	plait_flat_patches_destroy(&m->patches, &heap);
+	plait_element_tree_destroy(&m->tree, &heap);
+	free(m->x);
+	free(m->triangles);
+}
+
+/* Paths from `from` to `to` (per vertex), all guards `guard`; fits and says whether the root is
+ * flat. */
+static bool root_flat(patch_mesh *m, const vec3 *from, const vec3 *to, float guard)
+{
+	vec3 *motion = malloc(sizeof *motion * (size_t)m->vertex_count);
+	float *guards = malloc(sizeof *guards * (size_t)m->vertex_count);
+	for (int i = 0; i < m->vertex_count; ++i) {
+		motion[i] = v3_sub(to[i], from[i]);
+		guards[i] = guard;
+	}
+	plait_patch_paths paths = {to, motion, guards, 1.0f, 0.0f};
+	plait_flat_patches_fit(&m->patches, &m->tree, &paths);
+	bool flat = plait_flat_patches_flat(&m->patches, 0, &paths);
+	free(motion);
+	free(guards);
+	return flat;
+}
+
+Test(flat_patches, the_fast_arctangent_keeps_within_its_bound)
+{
+	float worst = 0.0f;
+	for (int k = 0; k <= 20000; ++k) {
+		float angle = 3.14159265f * (float)k / 20000.0f;
+		float y = fabsf(sinf(angle)), x = cosf(angle);
+		for (float scale = 1e-4f; scale < 1e5f; scale *= 31.0f) {
+			float error = fabsf(plait_flat_patches_atan2(scale * y, scale * x) - atan2f(scale * y, scale * x));
+			worst = fmaxf(worst, error);
+		}
+	}
+	cr_expect_lt(worst, 2e-5f, "arctangent off by %g radians", (double)worst);
+	cr_expect_eq(plait_flat_patches_atan2(0.0f, 0.0f), 0.0f);
+}
+
+static vec3 turned(vec3 axis, vec3 across, float angle)
+{
+	return v3_add(v3_scale(axis, cosf(angle)), v3_scale(across, sinf(angle)));
+}
+
+static vec3 random_unit(uint32_t *state)
+{
+	for (;;) {
+		vec3 v = v3(test_uniform(state, -1, 1), test_uniform(state, -1, 1), test_uniform(state, -1, 1));
+		float length = v3_length(v);
+		if (length > 0.1f && length < 1.0f) {
+			return v3_scale(v, 1.0f / length);
+		}
+	}
+}
+
+/* Every direction of either cone is within the merged one (a merged cone that misses some is a
+ * normal let past a right angle). */
+Test(flat_patches, a_merged_cone_holds_both_cones)
+{
+	uint32_t state = 7;
+	int merged = 0;
+	for (int trial = 0; trial < 2000; ++trial) {
+		plait_cone c[2];
+		for (int k = 0; k < 2; ++k) {
+			c[k] = (plait_cone){random_unit(&state), test_uniform(&state, 0.0f, 0.8f)};
+		}
+		plait_cone m = plait_cone_merge(c[0], c[1]);
+		if (m.angle >= 1.5707963f) {
+			continue;
+		}
+		merged += 1;
+		cr_assert(fabsf(v3_length(m.axis) - 1.0f) < 1e-5f);
+		for (int k = 0; k < 2; ++k) {
+			for (int s = 0; s < 24; ++s) {
+				vec3 across = v3_cross(c[k].axis, random_unit(&state));
+				across = v3_scale(across, 1.0f / v3_length(across));
+				vec3 edge = turned(c[k].axis, across, c[k].angle);
+				float angle = atan2f(v3_length(v3_cross(edge, m.axis)), v3_dot(edge, m.axis));
+				cr_assert_leq(angle, m.angle + 1e-5f, "trial %d: a direction %g from the merged axis, angle %g", trial,
+				              (double)angle, (double)m.angle);
+			}
+		}
+	}
+	cr_expect_gt(merged, 500);
+}
+
+/* A grid's nodes from 16 triangles up are disks, each with its contour, the notches filled. */
+Test(flat_patches, a_grids_patches_are_disks)
+{
+	patch_mesh m = grid(40, 40);
+	int large = 0, disks = 0;
+	for (int n = 0; n < m.tree.node_count; ++n) {
+		int first = m.patches.contour_first[n], count = m.patches.contour_first[n + 1] - first;
+		/* A node's triangle count: its leaves' under it. */
+		int triangles = 0, stack[64], top = 0;
+		stack[top++] = n;
+		while (top > 0) {
+			const plait_tree_node *node = &m.tree.nodes[stack[--top]];
+			if (node->count > 0) {
+				triangles += node->count;
+			} else {
+				stack[top++] = node->first;
+				stack[top++] = node->first + 1;
+			}
+		}
+		large += triangles >= 16;
+		disks += count > 0;
+
+	}
+	/* Now and then a median split leaves a triangle touching the rest at a corner only (no disk). */
+	cr_expect_geq(disks, large - large / 50, "%d of %d nodes have contours", disks, large);
+	/* The root's contour is the grid's border, 4 (n - 1) vertices. */
+	cr_expect_eq(m.patches.contour_first[1] - m.patches.contour_first[0], 4 * 39);
+	mesh_free(&m);
+}
+
+Test(flat_patches, a_sheet_moving_as_a_whole_is_flat)
+{
+	patch_mesh m = grid(32, 32);
+	vec3 *to = malloc(sizeof *to * (size_t)m.vertex_count);
+	for (int i = 0; i < m.vertex_count; ++i) {
+		/* Falling, drifting and tilting a little (a tenth of a radian). */
+		vec3 x = m.x[i];
+		to[i] = v3(x.x + 0.05f, x.y - 0.2f + 0.1f * x.x, x.z - 0.03f);
+	}
+	cr_expect(root_flat(&m, m.x, to, 1e-3f));
+	/* Rippled gently, as cloth lying on a body. */
+	for (int i = 0; i < m.vertex_count; ++i) {
+		to[i].y += 0.02f * sinf(6.0f * m.x[i].x) * cosf(5.0f * m.x[i].z);
+	}
+	cr_expect(root_flat(&m, m.x, to, 1e-3f));
+	free(to);
+	mesh_free(&m);
+}
+
+/* The sheet's far half folded back over the near one, a centimetre above it. */
+Test(flat_patches, a_sheet_folded_over_itself_is_not_flat_but_its_halves_are)
+{
+	patch_mesh m = grid(32, 32);
+	vec3 *folded = malloc(sizeof *folded * (size_t)m.vertex_count);
+	for (int i = 0; i < m.vertex_count; ++i) {
+		vec3 x = m.x[i];
+		float beyond = x.x - 0.5f;
+		/* Round a half circle of radius 5 mm at the fold. */
+		if (beyond <= 0.0f) {
+			folded[i] = x;
+		} else if (beyond < 0.005f * 3.14159f) {
+			float a = beyond / 0.005f;
+			folded[i] = v3(0.5f + 0.005f * sinf(a), 0.005f - 0.005f * cosf(a), x.z);
+		} else {
+			folded[i] = v3(0.5f - (beyond - 0.005f * 3.14159f), 0.01f, x.z);
+		}
+	}
+	cr_expect(!root_flat(&m, folded, folded, 1e-4f));
+	int flat = 0;
+	vec3 *motion = calloc((size_t)m.vertex_count, sizeof *motion);
+	plait_patch_paths paths = {folded, motion, NULL, 1.0f, 0.0f};
+	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
+	for (int n = 0; n < m.tree.node_count; ++n) {
+		flat += plait_flat_patches_flat(&m.patches, n, &paths);
+	}
+	cr_expect_gt(flat, 20, "only %d nodes flat in the folded sheet's halves", flat);
+	free(motion);
+	free(folded);
+	mesh_free(&m);
+}
+
+/* A long strip wound one and a half times round the y axis as a gentle ramp: every normal within
+ * a few degrees of +y, yet seen from above it lies over itself. The cone alone would pass it.
+ * Turned to several headings, so that the contour's count of turns alone (which may come out
+ * one) does not decide it. */
+Test(flat_patches, a_spiral_ramp_whose_normals_agree_is_not_flat)
+{
+	patch_mesh m = grid(240, 4);
+	vec3 *ramp = malloc(sizeof *ramp * (size_t)m.vertex_count);
+	vec3 *still = calloc((size_t)m.vertex_count, sizeof *still);
+	for (int heading = 0; heading < 12; ++heading) {
+		for (int i = 0; i < m.vertex_count; ++i) {
+			float along = m.x[i].x, across = m.x[i].z;
+			float turn = 3.0f * 3.14159265f * along + 0.5236f * (float)heading, radius = 0.2f + 0.1f * across;
+			/* Along +x turning about -y keeps the triangles facing up. */
+			ramp[i] = v3(radius * cosf(turn), 0.08f * along, -radius * sinf(turn));
+		}
+		plait_patch_paths paths = {ramp, still, NULL, 1.0f, 0.0f};
+		plait_flat_patches_fit(&m.patches, &m.tree, &paths);
+		cr_assert_lt(m.patches.patch_cone[0].angle, 0.3f, "the ramp's normals span %g radians",
+		             (double)m.patches.patch_cone[0].angle);
+		cr_expect(!plait_flat_patches_flat(&m.patches, 0, &paths), "heading %d", heading);
+	}
+	free(still);
+	free(ramp);
+	mesh_free(&m);
+}
+
+/* A fan of 32 triangles round one vertex that goes round it twice, climbing the first turn and
+ * coming down the second (so it passes through itself): every triangle faces up and its
+ * contour turns forward all the way round, twice. Only the count of turns tells. */
+Test(flat_patches, a_fan_going_twice_round_its_centre_is_not_flat)
+{
+	enum { RING = 32 };
+	patch_mesh m = {RING + 1, 1, RING + 1, RING, NULL, NULL, {0}, {0}};
+	m.x = malloc(sizeof *m.x * (size_t)m.vertex_count);
+	m.triangles = malloc(sizeof *m.triangles * (size_t)m.triangle_count);
+	m.x[RING] = v3(0.0f, 0.0f, 0.0f);
+	for (int k = 0; k < RING; ++k) {
+		float angle = 4.0f * 3.14159265f * (float)k / (float)RING;
+		float height = 0.01f * (float)(k < RING / 2 ? k : RING - k);
+		m.x[k] = v3(cosf(angle), height, -sinf(angle));
+		m.triangles[k][0] = RING;
+		m.triangles[k][1] = k;
+		m.triangles[k][2] = (k + 1) % RING;
+	}
+	build(&m);
+	vec3 *still = calloc((size_t)m.vertex_count, sizeof *still);
+	plait_patch_paths paths = {m.x, still, NULL, 1.0f, 0.0f};
+	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
+	cr_assert_gt(m.patches.contour_first[1], m.patches.contour_first[0], "the fan is a disk");
+	cr_assert_lt(m.patches.patch_cone[0].angle, 0.3f);
+	cr_expect(!plait_flat_patches_flat(&m.patches, 0, &paths));
+	free(still);
+	mesh_free(&m);
+}
+
+/* Turned in its own plane along straight paths: by 20 degrees it stays a sheet all along; by
+ * 180 degrees every triangle shrinks to a point halfway, though both ends are flat sheets. */
+Test(flat_patches, a_patch_that_turns_over_between_its_ends_is_not_flat)
+{
+	patch_mesh m = grid(24, 24);
+	vec3 *to = malloc(sizeof *to * (size_t)m.vertex_count);
+	float angles[2] = {0.35f, 3.14159265f};
+	for (int k = 0; k < 2; ++k) {
+		float c = cosf(angles[k]), s = sinf(angles[k]);
+		for (int i = 0; i < m.vertex_count; ++i) {
+			float x = m.x[i].x - 0.5f, z = m.x[i].z - 0.5f;
+			to[i] = v3(0.5f + c * x - s * z, 0.0f, 0.5f + s * x + c * z);
+		}
+		cr_expect_eq(root_flat(&m, m.x, to, 1e-4f), k == 0, "turned by %g radians", (double)angles[k]);
+	}
+	free(to);
+	mesh_free(&m);
+}
+
+/* Guards a third of an edge wide could fold neighbouring triangles onto each other: not flat. */
+Test(flat_patches, guards_wide_enough_to_fold_a_patch_keep_it_from_flat)
+{
+	patch_mesh m = grid(16, 16);
+	float edge = 1.0f / 15.0f;
+	cr_expect(root_flat(&m, m.x, m.x, 0.02f * edge));
+	cr_expect(!root_flat(&m, m.x, m.x, 0.34f * edge));
+	mesh_free(&m);
+}
+
+/* Two sheets in one mesh (no disk) and a sheet with a hole (a disk no longer): never flat. */
+Test(flat_patches, patches_that_are_no_disk_are_never_flat)
+{
+	patch_mesh m = grid(20, 20);
+	/* Cut out the middle quads: drop their triangles. */
+	int kept = 0;
+	for (int t = 0; t < m.triangle_count; ++t) {
+		vec3 c = v3_scale(v3_add(m.x[m.triangles[t][0]], v3_add(m.x[m.triangles[t][1]], m.x[m.triangles[t][2]])),
+		                  1.0f / 3.0f);
+		bool hole = fabsf(c.x - 0.5f) < 0.1f && fabsf(c.z - 0.5f) < 0.1f;
+		if (!hole) {
+			m.triangles[kept][0] = m.triangles[t][0];
+			m.triangles[kept][1] = m.triangles[t][1];
+			m.triangles[kept++][2] = m.triangles[t][2];
+		}
+	}
+	cr_assert_lt(kept, m.triangle_count);
+	m.triangle_count = kept;
+	plait_flat_patches_destroy(&m.patches, &heap);
+	plait_element_tree_destroy(&m.tree, &heap);
+	build(&m);
+	cr_expect_eq(m.patches.contour_first[1], m.patches.contour_first[0], "the holed sheet has a contour");
+	cr_expect(!root_flat(&m, m.x, m.x, 0.0f));
+	mesh_free(&m);
+}
