@@ -55,6 +55,7 @@ typedef struct run_result {
 	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe, order_violations;
 	int frames;
 	double features_kept, features_left_out; /* collider corners and edges met, summed over frames */
+	long culled, unflattened;                /* flat patches passed over, and of those swept */
 	bool failed;
 } run_result;
 
@@ -122,6 +123,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 	r.ms = 1e3 * stepping / r.frames;
 	r.collision_ms /= r.frames;
 	r.order_violations = collide_scene_order_violations(&scene);
+	plait_mesh_contacts_flat_counts(&scene.world.world->sim, &r.culled, &r.unflattened);
 	r.state = 1469598103934665603ull;
 	for (int c = 0; c < scene.cloth_count; ++c) {
 		int count = plait_object_get_vertex_count(scene.cloths[c]);
@@ -201,12 +203,12 @@ int main(int argc, char **argv)
 		printf(
 		    "scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d crossing_frames=%d "
 		    "worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d failsafe=%d "
-		    "collider_features=%.0f/%.0f first_ms=%.1f state=%016llx%s\n",
+		    "collider_features=%.0f/%.0f flat=%ld/%ld first_ms=%.1f state=%016llx%s\n",
 		    collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
 		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.worst_in_round,
 		    last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
-		    (last.features_kept + last.features_left_out) / last.frames, last.first_ms,
-		    (unsigned long long)last.state, last.failed ? " FAILED" : "");
+		    (last.features_kept + last.features_left_out) / last.frames, last.unflattened, last.culled,
+		    last.first_ms, (unsigned long long)last.state, last.failed ? " FAILED" : "");
 		fflush(stdout);
 		failures += last.failed;
 		free(ms);

@@ -47,4 +47,9 @@ void plait_mesh_contacts_collider_features(const plait_sim *sim, int *kept, int 
 /* Lists gathered since the stage was made (for tests and benchmarks). */
 long plait_mesh_contacts_listings(const plait_sim *sim);
 
+/* Flat patches since the stage was made whose pairs with themselves a gather passed over, and
+ * of those, the failsafe found not flat along the substep's paths and swept (for tests and
+ * benchmarks; collision/flat_patches.h). */
+void plait_mesh_contacts_flat_counts(const plait_sim *sim, long *culled, long *unflattened);
+
 #endif

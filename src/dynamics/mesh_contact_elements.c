@@ -29,6 +29,7 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	for (int k = 0; k < mc->object_count; ++k) {
 		plait_element_tree_destroy(&mc->objects[k].tree, a);
 		plait_flat_patches_destroy(&mc->objects[k].patches, a);
+		plait_free(a, mc->objects[k].culled);
 	}
 	plait_free(a, mc->objects);
 	plait_free(a, mc->features);
@@ -83,6 +84,10 @@ static bool build_patches(plait_sim *sim, plait_mesh_contacts *mc, collision_obj
 	}
 	bool ok = plait_flat_patches_build(&o->patches, a, &o->tree, (const int(*)[3])triangles, o->count);
 	plait_free(a, triangles);
+	if (ok && o->tree.node_count > 0) {
+		o->culled = plait_alloc_zero(a, (size_t)o->tree.node_count, sizeof(uint8_t));
+		ok = o->culled != NULL;
+	}
 	return ok;
 }
 
@@ -161,7 +166,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[surface->material];
 			mc->objects[mc->object_count++] = (collision_object){
-			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1, {0}};
+			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1, {0}, NULL};
 			for (int t = 0; t < surface->shape->triangle_count; ++t, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 3;
@@ -188,7 +193,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[chain->material];
 			mc->objects[mc->object_count++] =
-			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}, -1, {0}};
+			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}, -1, {0}, NULL};
 			for (int k = 0; k + 1 < chain->count; ++k, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 2;
@@ -206,7 +211,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				if (last == NULL || last->material != p->material[i] || last->first + last->count != e) {
 					/* Loose points never meet their own kind here (particle pairs do). */
 					mc->objects[mc->object_count++] =
-					    (collision_object){e, 0, p->material[i], false, {0}, -1, {0}};
+					    (collision_object){e, 0, p->material[i], false, {0}, -1, {0}, NULL};
 					last = &mc->objects[mc->object_count - 1];
 				}
 				last->count += 1;

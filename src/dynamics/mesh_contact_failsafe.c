@@ -416,6 +416,56 @@ static void sweep_around(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pas
 	plait_mesh_contacts_query_around(sim, mc, false, plait_mesh_contacts_visit_object_elements, &objects);
 }
 
+/* The substep's own paths (start to now) for the flat patches' checks, fitted. */
+static void fit_patches_to_substep(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		mc->sweep_end[i] = p->point[i].x;
+		mc->sweep_motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
+	}
+	plait_patch_paths paths = {mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
+	plait_mesh_contacts_fit_patches(mc, &paths, STAGE_FAILSAFE);
+}
+
+/* The patches the gather passed over hold pairs no list has: the gather took them flat along
+ * the paths it expected (without the guards). Each is checked along the substep's own paths,
+ * and one that is not flat along them (it folded, or its vertices strayed) has its pairs with
+ * itself swept here, so the guess costs a sweep at worst, never a crossing. */
+static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	bool any = false;
+	for (int k = 0; k < mc->object_count && !any; ++k) {
+		const collision_object *o = &mc->objects[k];
+		for (int n = 0; o->culled != NULL && n < o->tree.node_count && !any; ++n) {
+			any = o->culled[n] != 0;
+		}
+	}
+	if (!any) {
+		return;
+	}
+	fit_patches_to_substep(sim, mc);
+	bool boxes = false;
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		for (int n = 0; o->culled != NULL && n < o->tree.node_count; ++n) {
+			if (!o->culled[n] || plait_flat_patches_flat(&o->patches, n, &mc->patch_paths)) {
+				continue;
+			}
+			if (!boxes) {
+				plait_mesh_contacts_fit_boxes(sim, mc, true, pass->failsafe_distance);
+				boxes = true;
+			}
+			mc->unflattened += 1;
+			const vec3 *lower = mc->lower + o->first, *upper = mc->upper + o->first;
+			object_pass self = {pass, o->first, o->first};
+			int node[2] = {n, n};
+			plait_element_tree_piece_pairs(&o->tree, lower, upper, &o->tree, lower, upper, true, 0.0f, NULL,
+			                               node, plait_mesh_contacts_visit_object_elements, &self);
+		}
+	}
+}
+
 /* Sweeps from the start of the substep to now: every pair (from_list: the listed pairs, which
  * are every pair that can cross while the list covers), or with `around` only the listed pairs
  * and those with a vertex flagged in mc->around; returns the crossing pairs found and leaves
@@ -429,6 +479,7 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, true))) {
 			sweep_listed(mc, &pass, 0, mc->pair_count);
 		}
+		sweep_unflattened(sim, mc, &pass);
 	}
 	if (around) {
 		sweep_around(sim, mc, &pass);
@@ -438,14 +489,8 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, true, distance);
 	if (mc->cull_flat) {
-		/* The substep's own paths, start to now: a patch flat all along them crosses nothing. */
-		const plait_particles *p = &sim->particles;
-		for (int i = 0; i < p->count; ++i) {
-			mc->sweep_end[i] = p->point[i].x;
-			mc->sweep_motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
-		}
-		plait_patch_paths paths = {mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
-		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_FAILSAFE);
+		/* A patch flat all along the substep's own paths crosses nothing. */
+		fit_patches_to_substep(sim, mc);
 	}
 	int before = pass.swept;
 	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {

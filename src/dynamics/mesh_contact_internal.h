@@ -53,8 +53,10 @@ typedef struct collision_object {
 	plait_element_tree tree;
 	int features; /* a collider's: index of its first element's collider_features, or -1 */
 	/* A self-colliding cloth's patches that cannot touch themselves (refitted at each gather;
-	 * node_count 0 when it has none). */
+	 * node_count 0 when it has none), and per node whether the last gather passed over its
+	 * pairs with itself (the failsafe checks those patches along the substep's paths). */
 	plait_flat_patches patches;
+	uint8_t *culled;
 } collision_object;
 
 /* A rigid mesh collider's corners and edges (plait_collider.first). Each element's own vertices
@@ -207,11 +209,15 @@ typedef struct plait_mesh_contacts {
 	vec3 *motion; /* per particle: its motion over the gather's substep, start to gather */
 	float *guard; /* per particle: how far it may stray from that path */
 	/* The paths the flat patches were last fitted to, and for which traversal (STAGE_GATHER:
-	 * the list's paths above, over the substeps it serves; STAGE_FAILSAFE: the substep's paths,
-	 * sweep_end and sweep_motion per particle). cull_flat: whether traversals pass over flat
-	 * patches' pairs with themselves (on unless a test compares). */
+	 * the list's paths above, over the substeps it serves, without their guards: the failsafe
+	 * checks each patch the gather passed over along the substep's own paths, sweep_end and
+	 * sweep_motion per particle, which STAGE_FAILSAFE's traversal also culls by). cull_flat:
+	 * whether traversals pass over flat patches' pairs with themselves (on unless a test
+	 * compares). */
 	plait_patch_paths patch_paths;
 	int patches_fitted_for; /* a stage, or -1 */
+	long culled_patches;    /* patches the gathers passed over (a count) */
+	long unflattened;       /* of those, the ones the failsafe swept (a count) */
 	bool cull_flat;
 	vec3 *sweep_end, *sweep_motion;
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
@@ -373,6 +379,7 @@ void plait_mesh_contacts_visit_object_elements(int a, int b, void *context);
 typedef struct flat_skip {
 	const plait_flat_patches *patches;
 	const plait_patch_paths *paths;
+	uint8_t *culled; /* per node: set where skipped (the gather's), or NULL */
 } flat_skip;
 bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pass *pass);
 /* Fits every object's flat patches to `paths` for the traversals of stage `of`. */

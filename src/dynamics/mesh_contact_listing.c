@@ -4,6 +4,8 @@
 
 #include "collision/closest.h"
 
+#include <string.h>
+
 /* ---- Element boxes and the traversal of objects ---------------------------------------------- */
 
 /* Element boxes. For the gather: around the current positions, grown by LIST_SCALE times the
@@ -116,7 +118,11 @@ void plait_mesh_contacts_fit_patches(plait_mesh_contacts *mc, const plait_patch_
 bool plait_mesh_contacts_skip_flat(int node, void *context)
 {
 	const flat_skip *flat = context;
-	return plait_flat_patches_flat(flat->patches, node, flat->paths);
+	bool skip = plait_flat_patches_flat(flat->patches, node, flat->paths);
+	if (skip && flat->culled != NULL) {
+		flat->culled[node] = 1; /* one piece reaches a node's pair with itself (and the cut before) */
+	}
+	return skip;
 }
 
 /* Whether objects a < b meet in mesh contacts. */
@@ -154,7 +160,8 @@ void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pa
 		vec3 *la = mc->lower + oa->first, *ua = mc->upper + oa->first;
 		object_pass self = {pass, oa->first, oa->first};
 		if (oa->self) {
-			flat_skip flat = {&oa->patches, &mc->patch_paths};
+			flat_skip flat = {&oa->patches, &mc->patch_paths,
+			                  pass->stage == STAGE_GATHER ? oa->culled : NULL};
 			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
 			plait_element_tree_pairs_skipping(&oa->tree, la, ua,
 			                                  plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
@@ -260,9 +267,15 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
 	if (mc->cull_flat) {
-		/* Where each vertex may be while the list serves (as list_holds checks). */
-		plait_patch_paths paths = {mc->x_gather, mc->motion, mc->guard, 1.0f, (float)mc->list_serves};
+		/* The paths the list expects, without their guards: a guess, which the failsafe checks
+		 * along the real paths (plait_mesh_contacts_sweep_unflattened). */
+		plait_patch_paths paths = {mc->x_gather, mc->motion, NULL, 1.0f, (float)mc->list_serves};
 		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_GATHER);
+		for (int k = 0; k < mc->object_count; ++k) {
+			if (mc->objects[k].culled != NULL) {
+				memset(mc->objects[k].culled, 0, (size_t)mc->objects[k].tree.node_count);
+			}
+		}
 	}
 	pair_pass pass = {.sim = sim,
 	                  .mc = mc,
@@ -274,6 +287,11 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 		plait_mesh_contacts_traverse_objects(mc, &pass);
 	}
 	mc->last_listed = mc->pair_count;
+	for (int k = 0; k < mc->object_count; ++k) {
+		for (int n = 0; mc->objects[k].culled != NULL && n < mc->objects[k].tree.node_count; ++n) {
+			mc->culled_patches += mc->objects[k].culled[n];
+		}
+	}
 	mc->features_kept = pass.features_kept;
 	mc->features_left_out = pass.features_left_out;
 	mc->list_valid = !mc->out_of_memory;
@@ -454,4 +472,11 @@ long plait_mesh_contacts_listings(const plait_sim *sim)
 {
 	const plait_mesh_contacts *mc = sim->mesh_contacts;
 	return mc != NULL ? mc->listings : 0;
+}
+
+void plait_mesh_contacts_flat_counts(const plait_sim *sim, long *culled, long *unflattened)
+{
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	*culled = mc != NULL ? mc->culled_patches : 0;
+	*unflattened = mc != NULL ? mc->unflattened : 0;
 }
