@@ -84,7 +84,7 @@ static bool root_flat(patch_mesh *m, const vec3 *from, const vec3 *to, float gua
 	}
 	plait_patch_paths paths = {to, motion, guards, 1.0f, 0.0f};
 	plait_flat_patches_fit(&m->patches, &m->tree, &paths);
-	bool flat = plait_flat_patches_flat(&m->patches, 0, &paths);
+	bool flat = plait_flat_patches_flat(&m->patches, 0, &paths, NULL);
 	free(motion);
 	free(guards);
 	return flat;
@@ -97,7 +97,8 @@ Test(flat_patches, the_fast_arctangent_keeps_within_its_bound)
 		float angle = 3.14159265f * (float)k / 20000.0f;
 		float y = fabsf(sinf(angle)), x = cosf(angle);
 		for (float scale = 1e-4f; scale < 1e5f; scale *= 31.0f) {
-			float error = fabsf(plait_flat_patches_atan2(scale * y, scale * x) - atan2f(scale * y, scale * x));
+			float error =
+			    fabsf(plait_flat_patches_atan2(scale * y, scale * x) - atan2f(scale * y, scale * x));
 			worst = fmaxf(worst, error);
 		}
 	}
@@ -144,8 +145,9 @@ Test(flat_patches, a_merged_cone_holds_both_cones)
 				across = v3_scale(across, 1.0f / v3_length(across));
 				vec3 edge = turned(c[k].axis, across, c[k].angle);
 				float angle = atan2f(v3_length(v3_cross(edge, m.axis)), v3_dot(edge, m.axis));
-				cr_assert_leq(angle, m.angle + 1e-5f, "trial %d: a direction %g from the merged axis, angle %g", trial,
-				              (double)angle, (double)m.angle);
+				cr_assert_leq(angle, m.angle + 1e-5f,
+				              "trial %d: a direction %g from the merged axis, angle %g", trial, (double)angle,
+				              (double)m.angle);
 			}
 		}
 	}
@@ -173,7 +175,6 @@ Test(flat_patches, a_grids_patches_are_disks)
 		}
 		large += triangles >= 16;
 		disks += count > 0;
-
 	}
 	/* Now and then a median split leaves a triangle touching the rest at a corner only (no disk). */
 	cr_expect_geq(disks, large - large / 50, "%d of %d nodes have contours", disks, large);
@@ -225,7 +226,7 @@ Test(flat_patches, a_sheet_folded_over_itself_is_not_flat_but_its_halves_are)
 	plait_patch_paths paths = {folded, motion, NULL, 1.0f, 0.0f};
 	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 	for (int n = 0; n < m.tree.node_count; ++n) {
-		flat += plait_flat_patches_flat(&m.patches, n, &paths);
+		flat += plait_flat_patches_flat(&m.patches, n, &paths, NULL);
 	}
 	cr_expect_gt(flat, 20, "only %d nodes flat in the folded sheet's halves", flat);
 	free(motion);
@@ -253,7 +254,7 @@ Test(flat_patches, a_spiral_ramp_whose_normals_agree_is_not_flat)
 		plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 		cr_assert_lt(m.patches.patch_cone[0].angle, 0.3f, "the ramp's normals span %g radians",
 		             (double)m.patches.patch_cone[0].angle);
-		cr_expect(!plait_flat_patches_flat(&m.patches, 0, &paths), "heading %d", heading);
+		cr_expect(!plait_flat_patches_flat(&m.patches, 0, &paths, NULL), "heading %d", heading);
 	}
 	free(still);
 	free(ramp);
@@ -284,7 +285,7 @@ Test(flat_patches, a_fan_going_twice_round_its_centre_is_not_flat)
 	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 	cr_assert_gt(m.patches.contour_first[1], m.patches.contour_first[0], "the fan is a disk");
 	cr_assert_lt(m.patches.patch_cone[0].angle, 0.3f);
-	cr_expect(!plait_flat_patches_flat(&m.patches, 0, &paths));
+	cr_expect(!plait_flat_patches_flat(&m.patches, 0, &paths, NULL));
 	free(still);
 	mesh_free(&m);
 }
@@ -325,8 +326,9 @@ Test(flat_patches, patches_that_are_no_disk_are_never_flat)
 	/* Cut out the middle quads: drop their triangles. */
 	int kept = 0;
 	for (int t = 0; t < m.triangle_count; ++t) {
-		vec3 c = v3_scale(v3_add(m.x[m.triangles[t][0]], v3_add(m.x[m.triangles[t][1]], m.x[m.triangles[t][2]])),
-		                  1.0f / 3.0f);
+		vec3 c =
+		    v3_scale(v3_add(m.x[m.triangles[t][0]], v3_add(m.x[m.triangles[t][1]], m.x[m.triangles[t][2]])),
+		             1.0f / 3.0f);
 		bool hole = fabsf(c.x - 0.5f) < 0.1f && fabsf(c.z - 0.5f) < 0.1f;
 		if (!hole) {
 			m.triangles[kept][0] = m.triangles[t][0];

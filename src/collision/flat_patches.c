@@ -25,6 +25,9 @@ void plait_flat_patches_destroy(plait_flat_patches *fp, const plait_allocator *a
 	plait_free(allocator, fp->notch_first);
 	plait_free(allocator, fp->notch);
 	plait_free(allocator, fp->patch_cone);
+	plait_free(allocator, fp->node_begin);
+	plait_free(allocator, fp->node_end);
+	plait_free(allocator, fp->order);
 	memset(fp, 0, sizeof *fp);
 }
 
@@ -242,10 +245,14 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 	fp->contour_first = plait_alloc_zero(allocator, (size_t)nodes + 1, sizeof(int));
 	fp->notch_first = plait_alloc_zero(allocator, (size_t)nodes + 1, sizeof(int));
 	fp->patch_cone = plait_alloc_zero(allocator, (size_t)nodes, sizeof(plait_cone));
+	fp->node_begin = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
+	fp->node_end = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
+	fp->order = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
 	bool ok = b.twin != NULL && b.position != NULL && b.begin != NULL && b.end != NULL &&
 	          b.notch_stamp != NULL && b.visit_stamp != NULL && b.stack != NULL && b.out_stamp != NULL &&
 	          b.out_next != NULL && b.seen_stamp != NULL && fp->triangles != NULL &&
-	          fp->contour_first != NULL && fp->notch_first != NULL && fp->patch_cone != NULL;
+	          fp->contour_first != NULL && fp->notch_first != NULL && fp->patch_cone != NULL &&
+	          fp->node_begin != NULL && fp->node_end != NULL && fp->order != NULL;
 	if (ok) {
 		memcpy(fp->triangles, triangles, sizeof *fp->triangles * (size_t)count);
 		ok = find_twins(&b, count);
@@ -268,6 +275,9 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 			}
 		}
 		fp->contour_first[nodes] = b.contour_count;
+		memcpy(fp->node_begin, b.begin, sizeof(int) * (size_t)nodes);
+		memcpy(fp->node_end, b.end, sizeof(int) * (size_t)nodes);
+		memcpy(fp->order, tree->order, sizeof(int) * (size_t)count);
 		fp->notch_first[nodes] = b.notch_count;
 		ok = !b.failed;
 	}
@@ -368,12 +378,12 @@ static float guard(const plait_patch_paths *paths, int i)
 
 static vec3 path_start(const plait_patch_paths *paths, int i)
 {
-	return v3_mul_add(paths->at[i], -paths->back, paths->motion[i]);
+	return paths->motion != NULL ? v3_mul_add(paths->at[i], -paths->back, paths->motion[i]) : paths->at[i];
 }
 
 static vec3 path_end(const plait_patch_paths *paths, int i)
 {
-	return v3_mul_add(paths->at[i], paths->on, paths->motion[i]);
+	return paths->motion != NULL ? v3_mul_add(paths->at[i], paths->on, paths->motion[i]) : paths->at[i];
 }
 
 /* A triangle's normal over the paths: with its vertices moving straight it is
@@ -386,6 +396,13 @@ typedef struct triangle_normals {
 
 static triangle_normals triangle_normals_of(const plait_patch_paths *paths, const int *v)
 {
+	if (paths->motion == NULL) {
+		vec3 e1 = v3_sub(paths->at[v[1]], paths->at[v[0]]), e2 = v3_sub(paths->at[v[2]], paths->at[v[0]]);
+		vec3 n = v3_cross(e1, e2);
+		float g0 = guard(paths, v[0]), s1 = g0 + guard(paths, v[1]), s2 = g0 + guard(paths, v[2]);
+		float l1 = v3_length(e1), l2 = v3_length(e2);
+		return (triangle_normals){{n, n, n}, s1 * l2 + l1 * s2 + s1 * s2 + 1e-6f * l1 * l2};
+	}
 	vec3 a[3], b[3];
 	for (int k = 0; k < 3; ++k) {
 		a[k] = path_start(paths, v[k]);
@@ -465,25 +482,14 @@ void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tr
 
 /* ---- The contour ------------------------------------------------------------------------------ */
 
-bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait_patch_paths *paths)
+/* Whether the contour turns forward round its centre along d all along the paths, once round. */
+static bool star_contour(const plait_flat_patches *fp, int node, vec3 d, const plait_patch_paths *paths)
 {
-	if (fp->node_count == 0 || fp->patch_cone[node].angle >= FLAT_ANGLE) {
-		return false;
-	}
 	const int *contour = fp->contour + fp->contour_first[node];
 	int count = fp->contour_first[node + 1] - fp->contour_first[node];
 	if (count < 3) {
 		return false;
 	}
-	plait_cone cone = fp->patch_cone[node];
-	for (int k = fp->notch_first[node]; k < fp->notch_first[node + 1] && cone.angle < FLAT_ANGLE; ++k) {
-		cone =
-		    plait_cone_merge(cone, triangles_cone(paths, (const int(*)[3])fp->triangles, &fp->notch[k], 1));
-	}
-	if (cone.angle >= FLAT_ANGLE) {
-		return false;
-	}
-	vec3 d = cone.axis;
 	/* The centre c: the contour's mean, moving straight like its vertices (no guard: it is only
 	 * a reference point). */
 	vec3 ca = {0.0f, 0.0f, 0.0f}, cb = ca, c0 = ca;
@@ -496,9 +502,10 @@ bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait
 	ca = v3_scale(ca, inverse);
 	cb = v3_scale(cb, inverse);
 	c0 = v3_scale(c0, inverse);
-	/* A direction across d, to count the contour's turns round c at the gather. */
+	/* A direction across d, to count the contour's turns round c at `at`. */
 	vec3 across = fabsf(d.x) < 0.6f ? v3(1.0f, 0.0f, 0.0f) : v3(0.0f, 1.0f, 0.0f);
 	vec3 side = v3_cross(d, across);
+	bool still = paths->motion == NULL;
 	int crossings = 0;
 	int i = contour[count - 1];
 	vec3 pa = v3_sub(path_start(paths, i), ca), pb = v3_sub(path_end(paths, i), cb);
@@ -508,12 +515,15 @@ bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait
 		vec3 qa = v3_sub(path_start(paths, j), ca), qb = v3_sub(path_end(paths, j), cb);
 		/* Edge i-j turns round c the way of d throughout: d . (p x q), quadratic in time, by its
 		 * Bernstein coefficients, less what the guards may take off it. */
-		float o0 = v3_dot(d, v3_cross(pa, qa)), o2 = v3_dot(d, v3_cross(pb, qb));
-		float o1 = 0.5f * v3_dot(d, v3_add(v3_cross(pa, qb), v3_cross(pb, qa)));
+		float least = v3_dot(d, v3_cross(pa, qa));
+		if (!still) {
+			float o1 = 0.5f * v3_dot(d, v3_add(v3_cross(pa, qb), v3_cross(pb, qa)));
+			least = fminf(least, fminf(o1, v3_dot(d, v3_cross(pb, qb))));
+		}
 		float p = fmaxf(v3_length(pa), v3_length(pb)), q = fmaxf(v3_length(qa), v3_length(qb));
 		float gi = guard(paths, i), gj = guard(paths, j);
 		float loss = gi * q + p * gj + gi * gj + 1e-6f * p * q;
-		if (!(fminf(o0, fminf(o1, o2)) > loss)) {
+		if (!(least > loss)) {
 			return false;
 		}
 		float q_side = v3_dot(v3_sub(paths->at[j], c0), side);
@@ -526,4 +536,52 @@ bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait
 	/* Every edge turns forward round c, so the contour winds round it a whole number of times,
 	 * the same all along the paths: once is a star-shaped loop. */
 	return crossings == 1;
+}
+
+bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait_patch_paths *paths,
+                             vec3 *axis)
+{
+	if (fp->node_count == 0 || fp->patch_cone[node].angle >= FLAT_ANGLE ||
+	    fp->contour_first[node + 1] == fp->contour_first[node]) {
+		return false;
+	}
+	plait_cone cone = fp->patch_cone[node];
+	for (int k = fp->notch_first[node]; k < fp->notch_first[node + 1] && cone.angle < FLAT_ANGLE; ++k) {
+		cone =
+		    plait_cone_merge(cone, triangles_cone(paths, (const int(*)[3])fp->triangles, &fp->notch[k], 1));
+	}
+	if (cone.angle >= FLAT_ANGLE || !star_contour(fp, node, cone.axis, paths)) {
+		return false;
+	}
+	if (axis != NULL) {
+		*axis = cone.axis;
+	}
+	return true;
+}
+
+/* Whether every coefficient of a triangle's normal over the paths, less its guards' rho, is
+ * along d. */
+static bool faces(const plait_patch_paths *paths, const int *v, vec3 d)
+{
+	triangle_normals t = triangle_normals_of(paths, v);
+	return v3_dot(t.n[0], d) > t.rho && v3_dot(t.n[1], d) > t.rho && v3_dot(t.n[2], d) > t.rho;
+}
+
+bool plait_flat_patches_keeps_flat(const plait_flat_patches *fp, int node, vec3 axis,
+                                   const plait_patch_paths *paths)
+{
+	if (fp->node_count == 0 || fp->contour_first[node + 1] == fp->contour_first[node]) {
+		return false;
+	}
+	for (int k = fp->node_begin[node]; k < fp->node_end[node]; ++k) {
+		if (!faces(paths, fp->triangles[fp->order[k]], axis)) {
+			return false;
+		}
+	}
+	for (int k = fp->notch_first[node]; k < fp->notch_first[node + 1]; ++k) {
+		if (!faces(paths, fp->triangles[fp->notch[k]], axis)) {
+			return false;
+		}
+	}
+	return star_contour(fp, node, axis, paths);
 }

@@ -43,12 +43,14 @@ typedef struct plait_flat_patches {
 	 * notch[notch_first[n] .. notch_first[n + 1]). */
 	int *contour_first, *contour;
 	int *notch_first, *notch;
-	plait_cone *patch_cone; /* per node: its own triangles' normals (refitted; notches' when tested) */
+	plait_cone *patch_cone;     /* per node: its own triangles' normals (refitted; notches' when tested) */
+	int *node_begin, *node_end; /* per node: its triangles, order[node_begin .. node_end) */
+	int *order;                 /* the tree's order of triangles */
 } plait_flat_patches;
 
 /* Where each vertex may be while a list serves: within guard[i] of the straight path from
  * at[i] - back motion[i] to at[i] + on motion[i] (all vertices at the same point of their paths
- * at any one time). guard NULL: on the paths. */
+ * at any one time). guard NULL: on the paths; motion NULL: standing at `at`. */
 typedef struct plait_patch_paths {
 	const vec3 *at;
 	const vec3 *motion;
@@ -67,8 +69,15 @@ void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tr
                             const plait_patch_paths *paths);
 
 /* Whether node `node`'s patch cannot touch itself anywhere on the paths (the last fit's cones,
- * and its contour checked here). Reads only: safe from several threads at once. */
-bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait_patch_paths *paths);
+ * and its contour checked here); *axis (unless NULL): the direction it faces. Reads only: safe
+ * from several threads at once. */
+bool plait_flat_patches_flat(const plait_flat_patches *fp, int node, const plait_patch_paths *paths,
+                             vec3 *axis);
+
+/* The same along other paths for a patch found flat facing `axis` (no fit needed): every
+ * triangle still faces it all along them, and the contour is still star-shaped. */
+bool plait_flat_patches_keeps_flat(const plait_flat_patches *fp, int node, vec3 axis,
+                                   const plait_patch_paths *paths);
 
 /* A cone holding both, about the smallest (angle >= pi/2 when none under a right angle does). */
 plait_cone plait_cone_merge(plait_cone a, plait_cone b);

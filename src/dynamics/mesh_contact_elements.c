@@ -30,6 +30,7 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 		plait_element_tree_destroy(&mc->objects[k].tree, a);
 		plait_flat_patches_destroy(&mc->objects[k].patches, a);
 		plait_free(a, mc->objects[k].culled);
+		plait_free(a, mc->objects[k].culled_axis);
 	}
 	plait_free(a, mc->objects);
 	plait_free(a, mc->features);
@@ -86,7 +87,8 @@ static bool build_patches(plait_sim *sim, plait_mesh_contacts *mc, collision_obj
 	plait_free(a, triangles);
 	if (ok && o->tree.node_count > 0) {
 		o->culled = plait_alloc_zero(a, (size_t)o->tree.node_count, sizeof(uint8_t));
-		ok = o->culled != NULL;
+		o->culled_axis = plait_alloc_zero(a, (size_t)o->tree.node_count, sizeof(vec3));
+		ok = o->culled != NULL && o->culled_axis != NULL;
 	}
 	return ok;
 }
@@ -166,7 +168,8 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 			}
 			const plait_material *m = &sim->materials[surface->material];
 			mc->objects[mc->object_count++] = (collision_object){
-			    e, surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1, {0}, NULL};
+			    e,   surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1, {0}, NULL,
+			    NULL};
 			for (int t = 0; t < surface->shape->triangle_count; ++t, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 3;
@@ -192,8 +195,8 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				continue;
 			}
 			const plait_material *m = &sim->materials[chain->material];
-			mc->objects[mc->object_count++] =
-			    (collision_object){e, chain->count - 1, chain->material, m->self_collide, {0}, -1, {0}, NULL};
+			mc->objects[mc->object_count++] = (collision_object){
+			    e, chain->count - 1, chain->material, m->self_collide, {0}, -1, {0}, NULL, NULL};
 			for (int k = 0; k + 1 < chain->count; ++k, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 2;
@@ -211,7 +214,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				if (last == NULL || last->material != p->material[i] || last->first + last->count != e) {
 					/* Loose points never meet their own kind here (particle pairs do). */
 					mc->objects[mc->object_count++] =
-					    (collision_object){e, 0, p->material[i], false, {0}, -1, {0}, NULL};
+					    (collision_object){e, 0, p->material[i], false, {0}, -1, {0}, NULL, NULL};
 					last = &mc->objects[mc->object_count - 1];
 				}
 				last->count += 1;

@@ -416,22 +416,22 @@ static void sweep_around(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pas
 	plait_mesh_contacts_query_around(sim, mc, false, plait_mesh_contacts_visit_object_elements, &objects);
 }
 
-/* The substep's own paths (start to now) for the flat patches' checks, fitted. */
-static void fit_patches_to_substep(plait_sim *sim, plait_mesh_contacts *mc)
+/* The substep's own paths (start to now), for the flat patches. */
+static plait_patch_paths substep_paths(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
 		mc->sweep_end[i] = p->point[i].x;
 		mc->sweep_motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
 	}
-	plait_patch_paths paths = {mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
-	plait_mesh_contacts_fit_patches(mc, &paths, STAGE_FAILSAFE);
+	return (plait_patch_paths){mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
 }
 
 /* The patches the gather passed over hold pairs no list has: the gather took them flat along
- * the paths it expected (without the guards). Each is checked along the substep's own paths,
- * and one that is not flat along them (it folded, or its vertices strayed) has its pairs with
- * itself swept here, so the guess costs a sweep at worst, never a crossing. */
+ * the paths it expected (without the guards). Each is checked along the substep's own paths
+ * (facing the way it faced then), and one that is not flat along them (it folded, or its
+ * vertices strayed) has its pairs with itself swept here, so the guess costs a sweep at worst,
+ * never a crossing. */
 static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
 {
 	bool any = false;
@@ -444,12 +444,12 @@ static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass
 	if (!any) {
 		return;
 	}
-	fit_patches_to_substep(sim, mc);
+	plait_patch_paths paths = substep_paths(sim, mc);
 	bool boxes = false;
 	for (int k = 0; k < mc->object_count; ++k) {
 		const collision_object *o = &mc->objects[k];
 		for (int n = 0; o->culled != NULL && n < o->tree.node_count; ++n) {
-			if (!o->culled[n] || plait_flat_patches_flat(&o->patches, n, &mc->patch_paths)) {
+			if (!o->culled[n] || plait_flat_patches_keeps_flat(&o->patches, n, o->culled_axis[n], &paths)) {
 				continue;
 			}
 			if (!boxes) {
@@ -490,7 +490,8 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 	plait_mesh_contacts_fit_boxes(sim, mc, true, distance);
 	if (mc->cull_flat) {
 		/* A patch flat all along the substep's own paths crosses nothing. */
-		fit_patches_to_substep(sim, mc);
+		plait_patch_paths paths = substep_paths(sim, mc);
+		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_FAILSAFE);
 	}
 	int before = pass.swept;
 	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {

@@ -54,9 +54,11 @@ typedef struct collision_object {
 	int features; /* a collider's: index of its first element's collider_features, or -1 */
 	/* A self-colliding cloth's patches that cannot touch themselves (refitted at each gather;
 	 * node_count 0 when it has none), and per node whether the last gather passed over its
-	 * pairs with itself (the failsafe checks those patches along the substep's paths). */
+	 * pairs with itself (the failsafe checks those patches along the substep's paths), and
+	 * the direction each such patch faced. */
 	plait_flat_patches patches;
 	uint8_t *culled;
+	vec3 *culled_axis;
 } collision_object;
 
 /* A rigid mesh collider's corners and edges (plait_collider.first). Each element's own vertices
@@ -379,7 +381,8 @@ void plait_mesh_contacts_visit_object_elements(int a, int b, void *context);
 typedef struct flat_skip {
 	const plait_flat_patches *patches;
 	const plait_patch_paths *paths;
-	uint8_t *culled; /* per node: set where skipped (the gather's), or NULL */
+	uint8_t *culled;   /* per node: set where skipped (the gather's), or NULL */
+	vec3 *culled_axis; /* per node: the direction a skipped patch faced (with culled) */
 } flat_skip;
 bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pass *pass);
 /* Fits every object's flat patches to `paths` for the traversals of stage `of`. */

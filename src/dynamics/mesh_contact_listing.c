@@ -118,9 +118,12 @@ void plait_mesh_contacts_fit_patches(plait_mesh_contacts *mc, const plait_patch_
 bool plait_mesh_contacts_skip_flat(int node, void *context)
 {
 	const flat_skip *flat = context;
-	bool skip = plait_flat_patches_flat(flat->patches, node, flat->paths);
+	vec3 axis;
+	bool skip = plait_flat_patches_flat(flat->patches, node, flat->paths, &axis);
 	if (skip && flat->culled != NULL) {
-		flat->culled[node] = 1; /* one piece reaches a node's pair with itself (and the cut before) */
+		/* One piece reaches a node's pair with itself (and the cut before it, the same). */
+		flat->culled[node] = 1;
+		flat->culled_axis[node] = axis;
 	}
 	return skip;
 }
@@ -160,8 +163,9 @@ void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pa
 		vec3 *la = mc->lower + oa->first, *ua = mc->upper + oa->first;
 		object_pass self = {pass, oa->first, oa->first};
 		if (oa->self) {
-			flat_skip flat = {&oa->patches, &mc->patch_paths,
-			                  pass->stage == STAGE_GATHER ? oa->culled : NULL};
+			bool gather = pass->stage == STAGE_GATHER;
+			flat_skip flat = {&oa->patches, &mc->patch_paths, gather ? oa->culled : NULL,
+			                  gather ? oa->culled_axis : NULL};
 			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
 			plait_element_tree_pairs_skipping(&oa->tree, la, ua,
 			                                  plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
@@ -268,7 +272,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
 	if (mc->cull_flat) {
 		/* The paths the list expects, without their guards: a guess, which the failsafe checks
-		 * along the real paths (plait_mesh_contacts_sweep_unflattened). */
+		 * along the substep's own paths (sweep_unflattened). */
 		plait_patch_paths paths = {mc->x_gather, mc->motion, NULL, 1.0f, (float)mc->list_serves};
 		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_GATHER);
 		for (int k = 0; k < mc->object_count; ++k) {

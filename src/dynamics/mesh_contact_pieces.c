@@ -64,7 +64,9 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	const collision_object *oa = &mc->objects[piece->a], *ob = &mc->objects[piece->b];
 	bool self = piece->a == piece->b;
 	object_pass o = {pass, oa->first, ob->first};
-	flat_skip flat = {&oa->patches, &mc->patch_paths, pass->stage == STAGE_GATHER ? oa->culled : NULL};
+	bool gather = pass->stage == STAGE_GATHER;
+	flat_skip flat = {&oa->patches, &mc->patch_paths, gather ? oa->culled : NULL,
+	                  gather ? oa->culled_axis : NULL};
 	plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
 	plait_element_tree_piece_pairs(&oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree,
 	                               mc->lower + ob->first, mc->upper + ob->first, self,
@@ -109,7 +111,8 @@ bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *m
 				continue;
 			}
 			pair_pass margin_pass = {.stage = of};
-			flat_skip flat = {&oa->patches, &mc->patch_paths, of == STAGE_GATHER ? oa->culled : NULL};
+			flat_skip flat = {&oa->patches, &mc->patch_paths, of == STAGE_GATHER ? oa->culled : NULL,
+			                  of == STAGE_GATHER ? oa->culled_axis : NULL};
 			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
 			int n = plait_element_tree_split(
 			    &oa->tree, &ob->tree, a == b,
