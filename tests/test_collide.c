@@ -1173,3 +1173,46 @@ Test(collide, a_self_colliding_rope_does_not_pass_through_itself)
 	             (double)x[4].z);
 	plait_destroy_world(world);
 }
+
+/* The gather passes over a flat patch's pairs with itself on a guess (collision/flat_patches.h):
+ * flat along the paths it expects. Here the guess is wrong: after the gather, the sheet's far
+ * half folds back through its near half within the substep, while every vertex keeps within
+ * the guards the list believes in (widened by hand). No list holds the pairs that cross; the
+ * failsafe must find the patch no longer flat along the substep's paths, sweep its pairs, and
+ * leave no crossing. */
+Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_failsafe)
+{
+	plait_world_id world = weightless_world();
+	sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.001f, 0);
+	cr_assert(test_step_frames(world, 1));
+	plait_sim *sim = &world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		p->point[i].x = p->x_prev[i] = p->x_start[i];
+	}
+	long culled_before, unflattened_before, culled, unflattened;
+	plait_mesh_contacts_flat_counts(sim, &culled_before, &unflattened_before);
+	plait_mesh_contacts_gather(sim, mc);
+	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
+	cr_assert_gt(culled, culled_before, "the gather passed over no patch of a flat sheet");
+	/* The far half turned over the fold at x = 0, tilted about z so that it ends through the
+	 * near half along z = 0. */
+	for (int i = 0; i < p->count; ++i) {
+		vec3 x = p->x_start[i];
+		if (x.x > 0.0f) {
+			p->point[i].x = v3(-x.x, 0.2f * x.z, x.z);
+		}
+		mc->guard[i] = 1.0f;
+	}
+	plait_intersection_report report;
+	plait_world_check_intersections(world, &report, NULL);
+	cr_assert_gt(report.triangle_pairs, 0, "the fold crosses nothing");
+	plait_mesh_contacts_failsafe(sim);
+	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
+	cr_expect_gt(unflattened, unflattened_before, "the failsafe swept no passed-over patch");
+	plait_world_check_intersections(world, &report, NULL);
+	cr_expect_eq(report.triangle_pairs, 0, "%d triangle pairs cross after the failsafe",
+	             report.triangle_pairs);
+	plait_destroy_world(world);
+}
