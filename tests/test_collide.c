@@ -1216,3 +1216,69 @@ Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_fail
 	             report.triangle_pairs);
 	plait_destroy_world(world);
 }
+
+/* Rest pairs (closer than their contact distance in the start shape) are in no list: the
+ * failsafe sweeps them, and passes over those within a patch that the gather passed over and
+ * that kept flat along the substep. A sheet whose edges (6.25 mm) are shorter than its contact
+ * distance (1 cm) lies flat on one half, crumpled on the other; after the gather, a vertex of
+ * the crumpled half goes through a triangle one quad over, a rest pair of it. The failsafe
+ * must sweep that rest pair (its patch was not passed over) and leave no crossing. */
+Test(collide, a_rest_pair_crossing_beside_a_passed_over_patch_is_swept)
+{
+	plait_world_id world = weightless_world();
+	plait_object_id cloth = sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.005f, 0);
+	cr_assert(test_step_frames(world, 1));
+	plait_sim *sim = &world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	plait_particles *p = &sim->particles;
+	int first = -1;
+	for (int i = 0; i < p->count; ++i) {
+		vec3 x = p->x_start[i];
+		if (x.x > 0.0f) {
+			x.y = 0.012f * sinf(300.0f * x.x) * sinf(300.0f * x.z);
+		}
+		p->point[i].x = p->x_prev[i] = x;
+	}
+	long culled_before, unflattened, culled;
+	plait_mesh_contacts_flat_counts(sim, &culled_before, &unflattened);
+	plait_mesh_contacts_gather(sim, mc);
+	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
+	cr_assert_gt(culled, culled_before, "the gather passed over none of the flat half");
+	/* Vertex (12, 8) of the 17 x 17 grid, and a triangle of quad (13, 8) with its corner (13, 8). */
+	int triangles = plait_object_get_triangles(cloth, NULL, 0);
+	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
+	plait_object_get_triangles(cloth, tri, triangles);
+	first = mc->elements[0].v[0] - tri[0];
+	int v = first + 8 * 17 + 12, corner = first + 8 * 17 + 13, face = -1;
+	for (int t = 0; t < triangles && face < 0; ++t) {
+		bool in_quad = true, has_corner = false;
+		for (int k = 0; k < 3; ++k) {
+			int g = first + tri[3 * t + k], i = (g - first) % 17, j = (g - first) / 17;
+			in_quad = in_quad && i >= 13 && i <= 14 && j >= 8 && j <= 9;
+			has_corner = has_corner || g == corner;
+		}
+		face = in_quad && has_corner ? t : -1;
+	}
+	cr_assert_geq(face, 0);
+	vec3 f[3];
+	for (int k = 0; k < 3; ++k) {
+		f[k] = p->point[first + tri[3 * face + k]].x;
+	}
+	vec3 centre = v3_scale(v3_add(f[0], v3_add(f[1], f[2])), 1.0f / 3.0f);
+	vec3 normal = v3_cross(v3_sub(f[1], f[0]), v3_sub(f[2], f[0]));
+	normal = v3_scale(normal, 1.0f / v3_length(normal));
+	float side = v3_dot(v3_sub(p->point[v].x, centre), normal) > 0.0f ? 1.0f : -1.0f;
+	p->point[v].x = v3_mul_add(centre, -0.003f * side, normal);
+	for (int i = 0; i < p->count; ++i) {
+		mc->guard[i] = 1.0f; /* the list holds: only the failsafe's own sweeps can find it */
+	}
+	plait_intersection_report report;
+	plait_world_check_intersections(world, &report, NULL);
+	cr_assert_gt(report.triangle_pairs, 0, "the vertex crosses nothing");
+	plait_mesh_contacts_failsafe(sim);
+	plait_world_check_intersections(world, &report, NULL);
+	cr_expect_eq(report.triangle_pairs, 0, "%d triangle pairs cross after the failsafe",
+	             report.triangle_pairs);
+	free(tri);
+	plait_destroy_world(world);
+}

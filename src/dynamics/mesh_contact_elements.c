@@ -22,6 +22,8 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	mc->element_substep_spread = NULL;
 	plait_free(a, mc->element_around);
 	mc->element_around = NULL;
+	plait_free(a, mc->element_flat);
+	mc->element_flat = NULL;
 	plait_free(a, mc->shapes);
 	mc->shapes = NULL;
 	plait_free(a, mc->lower);
@@ -143,6 +145,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->element_substep_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->element_substep_spread = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->element_around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
+	mc->element_flat = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->shapes = plait_alloc_zero(a, (size_t)count, sizeof *mc->shapes);
 	mc->lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
@@ -157,8 +160,8 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 	bool ok = mc->elements != NULL && mc->element_reach != NULL && mc->element_guard != NULL &&
 	          mc->element_motion != NULL && mc->element_spread != NULL &&
 	          mc->element_substep_motion != NULL && mc->element_substep_spread != NULL &&
-	          mc->element_around != NULL && mc->shapes != NULL && mc->lower != NULL && mc->upper != NULL &&
-	          edges != NULL && owned != NULL && mc->objects != NULL;
+	          mc->element_around != NULL && mc->element_flat != NULL && mc->shapes != NULL &&
+	          mc->lower != NULL && mc->upper != NULL && edges != NULL && owned != NULL && mc->objects != NULL;
 	if (ok) {
 		int e = 0;
 		for (int s = 0; s < sim->surface_count; ++s) {

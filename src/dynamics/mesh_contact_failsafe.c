@@ -197,6 +197,7 @@ typedef struct rest_sweep_job {
 	plait_mesh_contacts *mc;
 	const plait_particles *p;
 	float distance;
+	const int *element_flat; /* or NULL */
 	_Atomic int crossed;
 } rest_sweep_job;
 
@@ -237,7 +238,10 @@ static void sweep_rest_range(void *context, int begin, int end)
 		float group_loss =
 		    mc->element_substep_spread[group->a] + mc->element_substep_spread[group->b] +
 		    v3_length(v3_sub(mc->element_substep_motion[group->a], mc->element_substep_motion[group->b]));
-		if (group->lower - group_loss > job->distance) {
+		/* Two elements of one patch that kept flat along the substep cannot have crossed. */
+		bool flat = job->element_flat != NULL && job->element_flat[group->a] >= 0 &&
+		            job->element_flat[group->a] == job->element_flat[group->b];
+		if (flat || group->lower - group_loss > job->distance) {
 			group->lower -= group_loss;
 			group->pending += group_loss;
 			continue;
@@ -277,10 +281,11 @@ static void sweep_rest_range(void *context, int begin, int end)
 
 #define REST_GRAIN 2048
 
-static void sweep_rest_pairs(pair_pass *pass)
+static void sweep_rest_pairs(pair_pass *pass, bool flat_checked)
 {
 	plait_mesh_contacts *mc = pass->mc;
-	rest_sweep_job job = {mc, &pass->sim->particles, pass->failsafe_distance, 0};
+	rest_sweep_job job = {mc, &pass->sim->particles, pass->failsafe_distance,
+	                      flat_checked ? mc->element_flat : NULL, 0};
 	if (mc->rest_group_count == 0) {
 		return;
 	}
@@ -429,10 +434,11 @@ static plait_patch_paths substep_paths(plait_sim *sim, plait_mesh_contacts *mc)
 
 /* The patches the gather passed over hold pairs no list has: the gather took them flat along
  * the paths it expected (without the guards). Each is checked along the substep's own paths
- * (facing the way it faced then), and one that is not flat along them (it folded, or its
- * vertices strayed) has its pairs with itself swept here, so the guess costs a sweep at worst,
- * never a crossing. */
-static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+ * (facing the way it faced then): the elements of one that kept flat are marked in
+ * mc->element_flat (their rest pairs cannot have crossed either); one that did not (it folded,
+ * or its vertices strayed) is marked 2 in culled, for sweep_unflattened. Returns whether any
+ * was passed over. */
+static bool check_passed_over(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	bool any = false;
 	for (int k = 0; k < mc->object_count && !any; ++k) {
@@ -442,16 +448,43 @@ static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass
 		}
 	}
 	if (!any) {
-		return;
+		return false;
+	}
+	for (int e = 0; e < mc->element_count; ++e) {
+		mc->element_flat[e] = -1;
 	}
 	plait_patch_paths paths = substep_paths(sim, mc);
-	bool boxes = false;
 	for (int k = 0; k < mc->object_count; ++k) {
-		const collision_object *o = &mc->objects[k];
+		collision_object *o = &mc->objects[k];
 		for (int n = 0; o->culled != NULL && n < o->tree.node_count; ++n) {
-			if (!o->culled[n] || plait_flat_patches_keeps_flat(&o->patches, n, o->culled_axis[n], &paths)) {
+			if (!o->culled[n]) {
 				continue;
 			}
+			if (!plait_flat_patches_keeps_flat(&o->patches, n, o->culled_axis[n], &paths)) {
+				o->culled[n] = 2;
+				continue;
+			}
+			const plait_flat_patches *fp = &o->patches;
+			for (int m = fp->node_begin[n]; m < fp->node_end[n]; ++m) {
+				mc->element_flat[o->first + fp->order[m]] = n;
+			}
+		}
+	}
+	return true;
+}
+
+/* Each patch check_passed_over found not flat along the substep's paths: its pairs with itself
+ * swept, so the gather's guess costs a sweep at worst, never a crossing. */
+static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	bool boxes = false;
+	for (int k = 0; k < mc->object_count; ++k) {
+		collision_object *o = &mc->objects[k];
+		for (int n = 0; o->culled != NULL && n < o->tree.node_count; ++n) {
+			if (o->culled[n] != 2) {
+				continue;
+			}
+			o->culled[n] = 1;
 			if (!boxes) {
 				plait_mesh_contacts_fit_boxes(sim, mc, true, pass->failsafe_distance);
 				boxes = true;
@@ -474,12 +507,16 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
                           bool around)
 {
 	pair_pass pass = {.sim = sim, .mc = mc, .stage = STAGE_FAILSAFE, .failsafe_distance = distance};
-	sweep_rest_pairs(&pass);
+	/* Round 0 over the list: the patches the gather passed over are checked first. */
+	bool flat_checked = from_list && check_passed_over(sim, mc);
+	sweep_rest_pairs(&pass, flat_checked);
 	if (from_list) {
 		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, true))) {
 			sweep_listed(mc, &pass, 0, mc->pair_count);
 		}
-		sweep_unflattened(sim, mc, &pass);
+		if (flat_checked) {
+			sweep_unflattened(sim, mc, &pass);
+		}
 	}
 	if (around) {
 		sweep_around(sim, mc, &pass);

@@ -57,7 +57,7 @@ typedef struct collision_object {
 	 * pairs with itself (the failsafe checks those patches along the substep's paths), and
 	 * the direction each such patch faced. */
 	plait_flat_patches patches;
-	uint8_t *culled;
+	uint8_t *culled; /* 1: passed over; 2: and found not flat along this substep's paths */
 	vec3 *culled_axis;
 } collision_object;
 
@@ -242,6 +242,9 @@ typedef struct plait_mesh_contacts {
 	/* Failsafe scratch: per particle, swept around (0 or 1; all 0 between sweeps); per element,
 	 * whether it has such a vertex. */
 	uint8_t *around;
+	/* Per element: the node of a patch the gather passed over that kept flat along this
+	 * substep's paths (its rest pairs cannot cross), or -1 (the failsafe's, round 0). */
+	int *element_flat;
 	uint8_t *element_around;
 	int (*members)[2]; /* (root, particle), sorted to walk zone by zone */
 } plait_mesh_contacts;
