@@ -33,7 +33,7 @@ static void build(patch_mesh *m)
 	}
 	cr_assert(plait_element_tree_build(&m->tree, &heap, centres, m->triangle_count));
 	cr_assert(plait_flat_patches_build(&m->patches, &heap, &m->tree, (const int(*)[3])m->triangles,
-	                                   m->triangle_count));
+	                                   m->triangle_count, m->x));
 	free(centres);
 }
 
@@ -343,5 +343,31 @@ Test(flat_patches, patches_that_are_no_disk_are_never_flat)
 	build(&m);
 	cr_expect_eq(m.patches.contour_first[1], m.patches.contour_first[0], "the holed sheet has a contour");
 	cr_expect(!root_flat(&m, m.x, m.x, 0.0f));
+	mesh_free(&m);
+}
+
+/* A flat L with thin arms (a sheet without its far 3/4 x 3/4): its border is star-shaped only
+ * round points near the inner corner, which the contour's mean is not; the centre chosen in the
+ * rest shape is. */
+Test(flat_patches, a_flat_l_is_flat_round_the_centre_chosen_at_rest)
+{
+	patch_mesh m = grid(33, 33);
+	int kept = 0;
+	for (int t = 0; t < m.triangle_count; ++t) {
+		vec3 c =
+		    v3_scale(v3_add(m.x[m.triangles[t][0]], v3_add(m.x[m.triangles[t][1]], m.x[m.triangles[t][2]])),
+		             1.0f / 3.0f);
+		if (!(c.x > 0.25f && c.z > 0.25f)) {
+			m.triangles[kept][0] = m.triangles[t][0];
+			m.triangles[kept][1] = m.triangles[t][1];
+			m.triangles[kept++][2] = m.triangles[t][2];
+		}
+	}
+	m.triangle_count = kept;
+	plait_flat_patches_destroy(&m.patches, &heap);
+	plait_element_tree_destroy(&m.tree, &heap);
+	build(&m);
+	cr_assert_geq(m.patches.centre[0].triangle, 0, "no centre for the L");
+	cr_expect(root_flat(&m, m.x, m.x, 1e-4f));
 	mesh_free(&m);
 }

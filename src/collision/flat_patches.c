@@ -25,6 +25,7 @@ void plait_flat_patches_destroy(plait_flat_patches *fp, const plait_allocator *a
 	plait_free(allocator, fp->notch_first);
 	plait_free(allocator, fp->notch);
 	plait_free(allocator, fp->patch_cone);
+	plait_free(allocator, fp->centre);
 	plait_free(allocator, fp->node_begin);
 	plait_free(allocator, fp->node_end);
 	plait_free(allocator, fp->order);
@@ -47,6 +48,10 @@ typedef struct patch_build {
 	int *seen_stamp;           /* per particle */
 	int *contour, contour_count, contour_capacity;
 	int *notch, notch_count, notch_capacity;
+	const vec3 *rest;           /* per particle: the rest shape the centres are chosen in */
+	plait_patch_centre *centre; /* per node */
+	float (*kernel)[2], (*clipped)[2], (*flat)[2]; /* scratch of choose_centre, kernel_capacity each */
+	int kernel_capacity;
 	const plait_allocator *allocator;
 	bool failed;
 } patch_build;
@@ -123,6 +128,121 @@ static int patch_triangle(const patch_build *b, int node, int notch_start, int k
 {
 	int own = b->end[node] - b->begin[node];
 	return k < own ? b->tree->order[b->begin[node] + k] : b->notch[notch_start + k - own];
+}
+
+/* Clips the convex polygon k[0..n) to the left of the line from a to b (2D); returns the new
+ * count (out holds it). */
+static int clip_left(const float (*k)[2], int n, const float *a, const float *b, float (*out)[2])
+{
+	float dx = b[0] - a[0], dy = b[1] - a[1];
+	int m = 0;
+	for (int i = 0; i < n; ++i) {
+		const float *p = k[i], *q = k[(i + 1) % n];
+		float sp = dx * (p[1] - a[1]) - dy * (p[0] - a[0]), sq = dx * (q[1] - a[1]) - dy * (q[0] - a[0]);
+		if (sp >= 0.0f) {
+			out[m][0] = p[0];
+			out[m++][1] = p[1];
+		}
+		if ((sp >= 0.0f) != (sq >= 0.0f)) {
+			float t = sp / (sp - sq);
+			out[m][0] = p[0] + t * (q[0] - p[0]);
+			out[m++][1] = p[1] + t * (q[1] - p[1]);
+		}
+	}
+	return m;
+}
+
+/* The patch's centre for its star test: in the rest shape, seen along its triangles' mean
+ * normal, the centroid of its contour's kernel (the points every border edge turns forward
+ * round), held as a point of one of its triangles so that it moves with them. None (triangle
+ * -1: the test takes the contour's mean) when the kernel is empty or no triangle holds it. */
+static void choose_centre(patch_build *b, int node, int notch_start, int faces, int contour_start)
+{
+	b->centre[node] = (plait_patch_centre){-1, {0.0f, 0.0f, 0.0f}};
+	if (b->rest == NULL) {
+		return;
+	}
+	vec3 n = {0.0f, 0.0f, 0.0f};
+	for (int k = 0; k < faces; ++k) {
+		const int *v = b->triangles[patch_triangle(b, node, notch_start, k)];
+		n = v3_add(n, v3_cross(v3_sub(b->rest[v[1]], b->rest[v[0]]), v3_sub(b->rest[v[2]], b->rest[v[0]])));
+	}
+	float length = v3_length(n);
+	if (!(length > 0.0f)) {
+		return;
+	}
+	n = v3_scale(n, 1.0f / length);
+	vec3 u = v3_cross(n, fabsf(n.x) < 0.6f ? v3(1.0f, 0.0f, 0.0f) : v3(0.0f, 1.0f, 0.0f));
+	u = v3_scale(u, 1.0f / v3_length(u));
+	vec3 w = v3_cross(n, u);
+	int count = b->contour_count - contour_start;
+	if (b->kernel_capacity < count + 8) {
+		int grown = 2 * (count + 8);
+		plait_free(b->allocator, b->kernel);
+		plait_free(b->allocator, b->clipped);
+		plait_free(b->allocator, b->flat);
+		b->kernel = plait_alloc_zero(b->allocator, (size_t)grown, sizeof *b->kernel);
+		b->clipped = plait_alloc_zero(b->allocator, (size_t)grown, sizeof *b->clipped);
+		b->flat = plait_alloc_zero(b->allocator, (size_t)grown, sizeof *b->flat);
+		b->kernel_capacity = grown;
+		if (b->kernel == NULL || b->clipped == NULL || b->flat == NULL) {
+			b->kernel_capacity = 0;
+			b->failed = true;
+			return;
+		}
+	}
+	/* The contour seen along n; the kernel starts as its bounding box, clipped by every edge. */
+	float(*points)[2] = b->flat;
+	float lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+	for (int k = 0; k < count; ++k) {
+		vec3 x = b->rest[b->contour[contour_start + k]];
+		points[k][0] = v3_dot(x, u);
+		points[k][1] = v3_dot(x, w);
+		for (int q = 0; q < 2; ++q) {
+			lo[q] = fminf(lo[q], points[k][q]);
+			hi[q] = fmaxf(hi[q], points[k][q]);
+		}
+	}
+	float(*kernel)[2] = b->kernel, (*spare)[2] = b->clipped;
+	float box[4][2] = {{lo[0], lo[1]}, {hi[0], lo[1]}, {hi[0], hi[1]}, {lo[0], hi[1]}};
+	memcpy(kernel, box, sizeof box);
+	int m = 4;
+	for (int k = 0; k < count && m > 0; ++k) {
+		m = clip_left((const float(*)[2])kernel, m, points[k], points[(k + 1) % count], spare);
+		float(*swap)[2] = kernel;
+		kernel = spare;
+		spare = swap;
+	}
+	if (m < 3) {
+		return;
+	}
+	float cx = 0.0f, cy = 0.0f;
+	for (int k = 0; k < m; ++k) {
+		cx += kernel[k][0];
+		cy += kernel[k][1];
+	}
+	cx /= (float)m;
+	cy /= (float)m;
+	/* The triangle holding it, and its weights there. */
+	for (int k = 0; k < faces; ++k) {
+		int t = patch_triangle(b, node, notch_start, k);
+		const int *v = b->triangles[t];
+		float x[3], y[3];
+		for (int q = 0; q < 3; ++q) {
+			x[q] = v3_dot(b->rest[v[q]], u);
+			y[q] = v3_dot(b->rest[v[q]], w);
+		}
+		float area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+		if (!(area > 0.0f)) {
+			continue;
+		}
+		float w1 = ((cx - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (cy - y[0])) / area;
+		float w2 = ((x[1] - x[0]) * (cy - y[0]) - (cx - x[0]) * (y[1] - y[0])) / area;
+		if (w1 >= 0.0f && w2 >= 0.0f && w1 + w2 <= 1.0f) {
+			b->centre[node] = (plait_patch_centre){t, {1.0f - w1 - w2, w1, w2}};
+			return;
+		}
+	}
 }
 
 /* Node `node`'s notches and contour appended to b's lists; false (and nothing appended) when its
@@ -209,6 +329,9 @@ static bool build_patch(patch_build *b, int node)
 		}
 		ok = reached == faces;
 	}
+	if (ok) {
+		choose_centre(b, node, notch_start, faces, contour_start);
+	}
 	if (!ok) {
 		b->contour_count = contour_start;
 		b->notch_count = notch_start;
@@ -217,7 +340,8 @@ static bool build_patch(patch_build *b, int node)
 }
 
 bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *allocator,
-                              const plait_element_tree *tree, const int (*triangles)[3], int triangle_count)
+                              const plait_element_tree *tree, const int (*triangles)[3], int triangle_count,
+                              const vec3 *rest)
 {
 	plait_flat_patches_destroy(fp, allocator);
 	int nodes = tree->node_count, count = triangle_count;
@@ -230,7 +354,7 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 			particles = triangles[t][k] >= particles ? triangles[t][k] + 1 : particles;
 		}
 	}
-	patch_build b = {.tree = tree, .triangles = triangles, .allocator = allocator};
+	patch_build b = {.tree = tree, .triangles = triangles, .allocator = allocator, .rest = rest};
 	b.twin = plait_alloc_zero(allocator, (size_t)(3 * count), sizeof(int));
 	b.position = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
 	b.begin = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
@@ -245,6 +369,7 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 	fp->contour_first = plait_alloc_zero(allocator, (size_t)nodes + 1, sizeof(int));
 	fp->notch_first = plait_alloc_zero(allocator, (size_t)nodes + 1, sizeof(int));
 	fp->patch_cone = plait_alloc_zero(allocator, (size_t)nodes, sizeof(plait_cone));
+	fp->centre = plait_alloc_zero(allocator, (size_t)nodes, sizeof(plait_patch_centre));
 	fp->node_begin = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
 	fp->node_end = plait_alloc_zero(allocator, (size_t)nodes, sizeof(int));
 	fp->order = plait_alloc_zero(allocator, (size_t)count, sizeof(int));
@@ -252,7 +377,7 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 	          b.notch_stamp != NULL && b.visit_stamp != NULL && b.stack != NULL && b.out_stamp != NULL &&
 	          b.out_next != NULL && b.seen_stamp != NULL && fp->triangles != NULL &&
 	          fp->contour_first != NULL && fp->notch_first != NULL && fp->patch_cone != NULL &&
-	          fp->node_begin != NULL && fp->node_end != NULL && fp->order != NULL;
+	          fp->centre != NULL && fp->node_begin != NULL && fp->node_end != NULL && fp->order != NULL;
 	if (ok) {
 		memcpy(fp->triangles, triangles, sizeof *fp->triangles * (size_t)count);
 		ok = find_twins(&b, count);
@@ -267,7 +392,9 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 			b.begin[n] = node->count > 0 ? node->first : b.begin[node->first];
 			b.end[n] = node->count > 0 ? node->first + node->count : b.end[node->first + 1];
 		}
+		b.centre = fp->centre;
 		for (int n = 0; n < nodes && !b.failed; ++n) {
+			fp->centre[n].triangle = -1;
 			fp->contour_first[n] = b.contour_count;
 			fp->notch_first[n] = b.notch_count;
 			if (b.end[n] - b.begin[n] >= FLAT_MIN_TRIANGLES) {
@@ -291,6 +418,9 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
 	plait_free(allocator, b.out_stamp);
 	plait_free(allocator, b.out_next);
 	plait_free(allocator, b.seen_stamp);
+	plait_free(allocator, b.kernel);
+	plait_free(allocator, b.clipped);
+	plait_free(allocator, b.flat);
 	fp->contour = b.contour;
 	fp->notch = b.notch;
 	if (!ok) {
@@ -482,26 +612,47 @@ void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tr
 
 /* ---- The contour ------------------------------------------------------------------------------ */
 
-/* Whether the contour turns forward round its centre along d all along the paths, once round. */
+/* Whether the contour turns forward round a centre along d all along the paths, once round:
+ * the centre chosen in the rest shape, else (or failing that) the contour's mean. */
+static bool star_round(const plait_flat_patches *fp, int node, vec3 d, const plait_patch_paths *paths,
+                       bool chosen);
+
 static bool star_contour(const plait_flat_patches *fp, int node, vec3 d, const plait_patch_paths *paths)
+{
+	if (fp->contour_first[node + 1] - fp->contour_first[node] < 3) {
+		return false;
+	}
+	bool chosen = fp->centre[node].triangle >= 0;
+	return star_round(fp, node, d, paths, chosen) || (chosen && star_round(fp, node, d, paths, false));
+}
+
+static bool star_round(const plait_flat_patches *fp, int node, vec3 d, const plait_patch_paths *paths,
+                       bool chosen)
 {
 	const int *contour = fp->contour + fp->contour_first[node];
 	int count = fp->contour_first[node + 1] - fp->contour_first[node];
-	if (count < 3) {
-		return false;
-	}
-	/* The centre c: the contour's mean, moving straight like its vertices (no guard: it is only
-	 * a reference point). */
+	/* The centre c moves straight like the vertices it is made of (no guard: it is only a
+	 * reference point). */
 	vec3 ca = {0.0f, 0.0f, 0.0f}, cb = ca, c0 = ca;
-	for (int k = 0; k < count; ++k) {
-		ca = v3_add(ca, path_start(paths, contour[k]));
-		cb = v3_add(cb, path_end(paths, contour[k]));
-		c0 = v3_add(c0, paths->at[contour[k]]);
+	if (chosen) {
+		const plait_patch_centre *centre = &fp->centre[node];
+		const int *v = fp->triangles[centre->triangle];
+		for (int k = 0; k < 3; ++k) {
+			ca = v3_mul_add(ca, centre->weight[k], path_start(paths, v[k]));
+			cb = v3_mul_add(cb, centre->weight[k], path_end(paths, v[k]));
+			c0 = v3_mul_add(c0, centre->weight[k], paths->at[v[k]]);
+		}
+	} else {
+		for (int k = 0; k < count; ++k) {
+			ca = v3_add(ca, path_start(paths, contour[k]));
+			cb = v3_add(cb, path_end(paths, contour[k]));
+			c0 = v3_add(c0, paths->at[contour[k]]);
+		}
+		float inverse = 1.0f / (float)count;
+		ca = v3_scale(ca, inverse);
+		cb = v3_scale(cb, inverse);
+		c0 = v3_scale(c0, inverse);
 	}
-	float inverse = 1.0f / (float)count;
-	ca = v3_scale(ca, inverse);
-	cb = v3_scale(cb, inverse);
-	c0 = v3_scale(c0, inverse);
 	/* A direction across d, to count the contour's turns round c at `at`. */
 	vec3 across = fabsf(d.x) < 0.6f ? v3(1.0f, 0.0f, 0.0f) : v3(0.0f, 1.0f, 0.0f);
 	vec3 side = v3_cross(d, across);

@@ -34,6 +34,12 @@ typedef struct plait_cone {
 	float angle;
 } plait_cone;
 
+/* A point of a patch: weights of one of its triangles' vertices (triangle -1: none). */
+typedef struct plait_patch_centre {
+	int triangle;
+	float weight[3];
+} plait_patch_centre;
+
 typedef struct plait_flat_patches {
 	int node_count;
 	int triangle_count;
@@ -43,6 +49,9 @@ typedef struct plait_flat_patches {
 	 * notch[notch_first[n] .. notch_first[n + 1]). */
 	int *contour_first, *contour;
 	int *notch_first, *notch;
+	/* Per node: the centre its contour is star-shaped round in the rest shape, if any (else the
+	 * contour's mean is tried). */
+	plait_patch_centre *centre;
 	plait_cone *patch_cone;     /* per node: its own triangles' normals (refitted; notches' when tested) */
 	int *node_begin, *node_end; /* per node: its triangles, order[node_begin .. node_end) */
 	int *order;                 /* the tree's order of triangles */
@@ -59,9 +68,11 @@ typedef struct plait_patch_paths {
 } plait_patch_paths;
 
 /* Builds the patches of `tree`'s nodes over its triangles (particle indices, the tree's element
- * numbering). Returns false when out of memory (fp is then empty). */
+ * numbering), their centres chosen in the rest shape (per particle; NULL: none). Returns false
+ * when out of memory (fp is then empty). */
 bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *allocator,
-                              const plait_element_tree *tree, const int (*triangles)[3], int triangle_count);
+                              const plait_element_tree *tree, const int (*triangles)[3], int triangle_count,
+                              const vec3 *rest);
 void plait_flat_patches_destroy(plait_flat_patches *fp, const plait_allocator *allocator);
 
 /* Refits every triangle's and node's normal cone over the paths. */

@@ -85,7 +85,8 @@ static bool build_patches(plait_sim *sim, plait_mesh_contacts *mc, collision_obj
 	for (int t = 0; t < o->count; ++t) {
 		memcpy(triangles[t], mc->elements[o->first + t].v, sizeof triangles[t]);
 	}
-	bool ok = plait_flat_patches_build(&o->patches, a, &o->tree, (const int(*)[3])triangles, o->count);
+	bool ok = plait_flat_patches_build(&o->patches, a, &o->tree, (const int(*)[3])triangles, o->count,
+	                                   sim->particles.x_start);
 	plait_free(a, triangles);
 	if (ok && o->tree.node_count > 0) {
 		o->culled = plait_alloc_zero(a, (size_t)o->tree.node_count, sizeof(uint8_t));
