@@ -598,16 +598,34 @@ static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*tri
 	return cone_round(v3_scale(sum, 1.0f / length), t, count);
 }
 
-void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tree,
-                            const plait_patch_paths *paths)
+void plait_flat_patches_fit_leaves(plait_flat_patches *fp, const plait_element_tree *tree,
+                                   const plait_patch_paths *paths, int first, int last)
+{
+	for (int n = first; n < last && n < fp->node_count; ++n) {
+		const plait_tree_node *node = &tree->nodes[n];
+		if (node->count > 0) {
+			fp->patch_cone[n] =
+			    triangles_cone(paths, (const int(*)[3])fp->triangles, tree->order + node->first, node->count);
+		}
+	}
+}
+
+void plait_flat_patches_fit_parents(plait_flat_patches *fp, const plait_element_tree *tree)
 {
 	for (int n = fp->node_count - 1; n >= 0; --n) {
 		const plait_tree_node *node = &tree->nodes[n];
-		fp->patch_cone[n] =
-		    node->count > 0 ? triangles_cone(paths, (const int(*)[3])fp->triangles, tree->order + node->first,
-		                                     node->count)
-		                    : plait_cone_merge(fp->patch_cone[node->first], fp->patch_cone[node->first + 1]);
+		if (node->count == 0) {
+			fp->patch_cone[n] =
+			    plait_cone_merge(fp->patch_cone[node->first], fp->patch_cone[node->first + 1]);
+		}
 	}
+}
+
+void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tree,
+                            const plait_patch_paths *paths)
+{
+	plait_flat_patches_fit_leaves(fp, tree, paths, 0, fp->node_count);
+	plait_flat_patches_fit_parents(fp, tree);
 }
 
 /* ---- The contour ------------------------------------------------------------------------------ */

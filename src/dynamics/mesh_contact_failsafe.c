@@ -432,6 +432,35 @@ static plait_patch_paths substep_paths(plait_sim *sim, plait_mesh_contacts *mc)
 	return (plait_patch_paths){mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
 }
 
+typedef struct check_job {
+	plait_mesh_contacts *mc;
+	collision_object *object;
+	const plait_patch_paths *paths;
+} check_job;
+
+/* check_passed_over for the nodes [begin, end) of one object (passed-over patches never share a
+ * triangle, so ranges side by side write apart). */
+static void check_nodes(void *context, int begin, int end)
+{
+	check_job *job = context;
+	collision_object *o = job->object;
+	const plait_flat_patches *fp = &o->patches;
+	for (int n = begin; n < end; ++n) {
+		if (!o->culled[n]) {
+			continue;
+		}
+		if (!plait_flat_patches_keeps_flat(fp, n, o->culled_axis[n], job->paths)) {
+			o->culled[n] = 2;
+			continue;
+		}
+		for (int m = fp->node_begin[n]; m < fp->node_end[n]; ++m) {
+			job->mc->element_flat[o->first + fp->order[m]] = n;
+		}
+	}
+}
+
+#define CHECK_GRAIN 256
+
 /* The patches the gather passed over hold pairs no list has: the gather took them flat along
  * the paths it expected (without the guards). Each is checked along the substep's own paths
  * (facing the way it faced then): the elements of one that kept flat are marked in
@@ -456,18 +485,9 @@ static bool check_passed_over(plait_sim *sim, plait_mesh_contacts *mc)
 	plait_patch_paths paths = substep_paths(sim, mc);
 	for (int k = 0; k < mc->object_count; ++k) {
 		collision_object *o = &mc->objects[k];
-		for (int n = 0; o->culled != NULL && n < o->tree.node_count; ++n) {
-			if (!o->culled[n]) {
-				continue;
-			}
-			if (!plait_flat_patches_keeps_flat(&o->patches, n, o->culled_axis[n], &paths)) {
-				o->culled[n] = 2;
-				continue;
-			}
-			const plait_flat_patches *fp = &o->patches;
-			for (int m = fp->node_begin[n]; m < fp->node_end[n]; ++m) {
-				mc->element_flat[o->first + fp->order[m]] = n;
-			}
+		if (o->culled != NULL) {
+			check_job job = {mc, o, &paths};
+			plait_parallel_for(&sim->parallel, check_nodes, &job, 0, o->tree.node_count, CHECK_GRAIN);
 		}
 	}
 	return true;
@@ -528,7 +548,7 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 	if (mc->cull_flat) {
 		/* A patch flat all along the substep's own paths crosses nothing. */
 		plait_patch_paths paths = substep_paths(sim, mc);
-		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_FAILSAFE);
+		plait_mesh_contacts_fit_patches(sim, mc, &paths, STAGE_FAILSAFE);
 	}
 	int before = pass.swept;
 	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {

@@ -389,7 +389,8 @@ typedef struct flat_skip {
 } flat_skip;
 bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pass *pass);
 /* Fits every object's flat patches to `paths` for the traversals of stage `of`. */
-void plait_mesh_contacts_fit_patches(plait_mesh_contacts *mc, const plait_patch_paths *paths, stage of);
+void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths,
+                                     stage of);
 bool plait_mesh_contacts_skip_flat(int node, void *context);
 
 /* mesh_contact_features.c */

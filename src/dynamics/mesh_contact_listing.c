@@ -106,12 +106,33 @@ bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pa
 	return mc->cull_flat && mc->patches_fitted_for == (int)pass->stage && !pass->around_only;
 }
 
-void plait_mesh_contacts_fit_patches(plait_mesh_contacts *mc, const plait_patch_paths *paths, stage of)
+typedef struct fit_job {
+	plait_mesh_contacts *mc;
+	collision_object *object;
+} fit_job;
+
+static void fit_leaves(void *context, int begin, int end)
+{
+	fit_job *job = context;
+	plait_flat_patches_fit_leaves(&job->object->patches, &job->object->tree, &job->mc->patch_paths, begin,
+	                              end);
+}
+
+#define FIT_GRAIN 1024
+
+void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths,
+                                     stage of)
 {
 	mc->patch_paths = *paths;
 	mc->patches_fitted_for = (int)of;
 	for (int k = 0; k < mc->object_count; ++k) {
-		plait_flat_patches_fit(&mc->objects[k].patches, &mc->objects[k].tree, &mc->patch_paths);
+		collision_object *o = &mc->objects[k];
+		if (o->patches.node_count == 0) {
+			continue;
+		}
+		fit_job job = {mc, o};
+		plait_parallel_for(&sim->parallel, fit_leaves, &job, 0, o->patches.node_count, FIT_GRAIN);
+		plait_flat_patches_fit_parents(&o->patches, &o->tree);
 	}
 }
 
@@ -274,7 +295,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 		/* The paths the list expects, without their guards: a guess, which the failsafe checks
 		 * along the substep's own paths (sweep_unflattened). */
 		plait_patch_paths paths = {mc->x_gather, mc->motion, NULL, 1.0f, (float)mc->list_serves};
-		plait_mesh_contacts_fit_patches(mc, &paths, STAGE_GATHER);
+		plait_mesh_contacts_fit_patches(sim, mc, &paths, STAGE_GATHER);
 		for (int k = 0; k < mc->object_count; ++k) {
 			if (mc->objects[k].culled != NULL) {
 				memset(mc->objects[k].culled, 0, (size_t)mc->objects[k].tree.node_count);
