@@ -18,9 +18,15 @@
  * it that share two of its edges (its notches), which straightens it. A patch covering more is
  * still a sound test: if the larger patch cannot touch itself, neither can the node's.
  *
- * The patches' shapes (contours, notches) are built once from the tree and the triangles; the
- * cones are refitted before each traversal. Nodes whose patch is no disk (several pieces, holes,
- * a boundary that touches itself) or is small are never taken as flat. */
+ * The centre c of each patch is chosen once, in the rest shape: the centroid of its contour's
+ * kernel (the points every boundary edge turns forward round), kept as a point of one of its
+ * triangles so that it moves with them; the contour's mean is tried after it.
+ *
+ * The patches' shapes (contours, notches, centres) are built once from the tree and the
+ * triangles; the cones are refitted before each traversal. Nodes whose patch is no disk (several
+ * pieces, holes, a boundary that touches itself) or is small are never taken as flat. The
+ * callers (dynamics/mesh_contact_*.c) take a patch flat on a guess and check it afterwards along
+ * the paths really taken (plait_flat_patches_keeps_flat). */
 #ifndef PLAIT_COLLISION_FLAT_PATCHES_H
 #define PLAIT_COLLISION_FLAT_PATCHES_H
 
