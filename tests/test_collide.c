@@ -782,6 +782,19 @@ static void tally_listing(void *context, int type, const int *v)
 	tally_pair(tally, tally->particles, type, v);
 }
 
+/* A still sheet of 16 x 16 quads, 10 cm wide (6.25 mm edges), `thickness` thick, in a weightless
+ * world, stepped one frame so that its mesh contacts are built (asserted active); *cloth is
+ * the sheet. */
+static plait_mesh_contacts *fine_sheet(plait_world_id *world, float thickness, plait_object_id *cloth)
+{
+	*world = weightless_world();
+	*cloth = sheet(*world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, thickness, 0);
+	cr_assert(test_step_frames(*world, 1));
+	plait_mesh_contacts *mc = world->world->sim.mesh_contacts;
+	cr_assert(mc != NULL && mc->active);
+	return mc;
+}
+
 /* A sheet whose edges (6.7 mm) are shorter than its contact distance (1 cm): its element pairs
  * hold rest pairs beside pairs that are not, and the gather passes over the rest pairs by
  * their slots. Squeezed to half its width and rippled, the list must still hold every vertex-
@@ -791,12 +804,10 @@ static void tally_listing(void *context, int type, const int *v)
  * is of the walk, so it walks them.) */
 Test(collide, a_fine_sheets_list_holds_every_pair_in_reach_but_its_rest_pairs)
 {
-	plait_world_id world = weightless_world();
-	plait_object_id cloth = sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.005f, 0);
-	cr_assert(test_step_frames(world, 1));
+	plait_world_id world;
+	plait_object_id cloth;
+	plait_mesh_contacts *mc = fine_sheet(&world, 0.005f, &cloth);
 	plait_sim *sim = &world.world->sim;
-	plait_mesh_contacts *mc = sim->mesh_contacts;
-	cr_assert(mc != NULL && mc->active);
 	int partial = 0;
 	for (int k = 0; k < mc->near_start[mc->element_count]; ++k) {
 		partial += mc->near_list[k].rest_slots != ALL_REST_SLOTS;
@@ -897,12 +908,10 @@ static void tally_short(void *context, int type, const int *v)
  * those, and be shorter than a list that serves on. */
 Test(collide, a_short_list_holds_the_pairs_in_contact_and_those_whose_paths_met)
 {
-	plait_world_id world = weightless_world();
-	plait_object_id cloth = sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.005f, 0);
-	cr_assert(test_step_frames(world, 1));
+	plait_world_id world;
+	plait_object_id cloth;
+	plait_mesh_contacts *mc = fine_sheet(&world, 0.005f, &cloth);
 	plait_sim *sim = &world.world->sim;
-	plait_mesh_contacts *mc = sim->mesh_contacts;
-	cr_assert(mc != NULL && mc->active);
 	plait_particles *p = &sim->particles;
 	/* Folded in two at x = 0: where z < 0 the upper half lies 8 mm over the lower (in contact);
 	 * where z > 0 it lies 25 mm over it (out of contact), having come up through it this
@@ -1182,11 +1191,10 @@ Test(collide, a_self_colliding_rope_does_not_pass_through_itself)
  * leave no crossing. */
 Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_failsafe)
 {
-	plait_world_id world = weightless_world();
-	sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.001f, 0);
-	cr_assert(test_step_frames(world, 1));
+	plait_world_id world;
+	plait_object_id cloth;
+	plait_mesh_contacts *mc = fine_sheet(&world, 0.001f, &cloth);
 	plait_sim *sim = &world.world->sim;
-	plait_mesh_contacts *mc = sim->mesh_contacts;
 	plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
 		p->point[i].x = p->x_prev[i] = p->x_start[i];
@@ -1225,11 +1233,10 @@ Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_fail
  * must sweep that rest pair (its patch was not passed over) and leave no crossing. */
 Test(collide, a_rest_pair_crossing_beside_a_passed_over_patch_is_swept)
 {
-	plait_world_id world = weightless_world();
-	plait_object_id cloth = sheet(world, 16, 0.1f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.005f, 0);
-	cr_assert(test_step_frames(world, 1));
+	plait_world_id world;
+	plait_object_id cloth;
+	plait_mesh_contacts *mc = fine_sheet(&world, 0.005f, &cloth);
 	plait_sim *sim = &world.world->sim;
-	plait_mesh_contacts *mc = sim->mesh_contacts;
 	plait_particles *p = &sim->particles;
 	int first = -1;
 	for (int i = 0; i < p->count; ++i) {

@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "collision/element_tree.h"
 #include "collision/flat_patches.h"
@@ -70,6 +71,23 @@ static void mesh_free(patch_mesh *m)
 	plait_element_tree_destroy(&m->tree, &heap);
 	free(m->x);
 	free(m->triangles);
+}
+
+/* Keeps the triangles whose centre `keep` takes, and builds the tree and patches again. */
+static void keep_triangles(patch_mesh *m, bool (*keep)(vec3 centre))
+{
+	int kept = 0;
+	for (int t = 0; t < m->triangle_count; ++t) {
+		const int *v = m->triangles[t];
+		if (keep(v3_scale(v3_add(m->x[v[0]], v3_add(m->x[v[1]], m->x[v[2]])), 1.0f / 3.0f))) {
+			memmove(m->triangles[kept++], v, sizeof m->triangles[0]);
+		}
+	}
+	cr_assert_lt(kept, m->triangle_count);
+	m->triangle_count = kept;
+	plait_flat_patches_destroy(&m->patches, &heap);
+	plait_element_tree_destroy(&m->tree, &heap);
+	build(m);
 }
 
 /* Paths from `from` to `to` (per vertex), all guards `guard`; fits and says whether the root is
@@ -319,31 +337,24 @@ Test(flat_patches, guards_wide_enough_to_fold_a_patch_keep_it_from_flat)
 	mesh_free(&m);
 }
 
-/* Two sheets in one mesh (no disk) and a sheet with a hole (a disk no longer): never flat. */
+static bool outside_the_hole(vec3 c)
+{
+	return !(fabsf(c.x - 0.5f) < 0.1f && fabsf(c.z - 0.5f) < 0.1f);
+}
+
+/* A sheet with a hole in the middle is a disk no longer: never flat. */
 Test(flat_patches, patches_that_are_no_disk_are_never_flat)
 {
 	patch_mesh m = grid(20, 20);
-	/* Cut out the middle quads: drop their triangles. */
-	int kept = 0;
-	for (int t = 0; t < m.triangle_count; ++t) {
-		vec3 c =
-		    v3_scale(v3_add(m.x[m.triangles[t][0]], v3_add(m.x[m.triangles[t][1]], m.x[m.triangles[t][2]])),
-		             1.0f / 3.0f);
-		bool hole = fabsf(c.x - 0.5f) < 0.1f && fabsf(c.z - 0.5f) < 0.1f;
-		if (!hole) {
-			m.triangles[kept][0] = m.triangles[t][0];
-			m.triangles[kept][1] = m.triangles[t][1];
-			m.triangles[kept++][2] = m.triangles[t][2];
-		}
-	}
-	cr_assert_lt(kept, m.triangle_count);
-	m.triangle_count = kept;
-	plait_flat_patches_destroy(&m.patches, &heap);
-	plait_element_tree_destroy(&m.tree, &heap);
-	build(&m);
+	keep_triangles(&m, outside_the_hole);
 	cr_expect_eq(m.patches.contour_first[1], m.patches.contour_first[0], "the holed sheet has a contour");
 	cr_expect(!root_flat(&m, m.x, m.x, 0.0f));
 	mesh_free(&m);
+}
+
+static bool in_the_l(vec3 c)
+{
+	return !(c.x > 0.25f && c.z > 0.25f);
 }
 
 /* A flat L with thin arms (a sheet without its far 3/4 x 3/4): its border is star-shaped only
@@ -352,21 +363,7 @@ Test(flat_patches, patches_that_are_no_disk_are_never_flat)
 Test(flat_patches, a_flat_l_is_flat_round_the_centre_chosen_at_rest)
 {
 	patch_mesh m = grid(33, 33);
-	int kept = 0;
-	for (int t = 0; t < m.triangle_count; ++t) {
-		vec3 c =
-		    v3_scale(v3_add(m.x[m.triangles[t][0]], v3_add(m.x[m.triangles[t][1]], m.x[m.triangles[t][2]])),
-		             1.0f / 3.0f);
-		if (!(c.x > 0.25f && c.z > 0.25f)) {
-			m.triangles[kept][0] = m.triangles[t][0];
-			m.triangles[kept][1] = m.triangles[t][1];
-			m.triangles[kept++][2] = m.triangles[t][2];
-		}
-	}
-	m.triangle_count = kept;
-	plait_flat_patches_destroy(&m.patches, &heap);
-	plait_element_tree_destroy(&m.tree, &heap);
-	build(&m);
+	keep_triangles(&m, in_the_l);
 	cr_assert_geq(m.patches.centre[0].triangle, 0, "no centre for the L");
 	cr_expect(root_flat(&m, m.x, m.x, 1e-4f));
 	mesh_free(&m);
