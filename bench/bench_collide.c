@@ -20,6 +20,7 @@
  *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
  *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
+ *                      [--per-frame] (a line per frame: its ms, collision ms and counters)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
 #include <stdint.h>
@@ -60,7 +61,7 @@ typedef struct run_result {
 } run_result;
 
 static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose,
-                      const collide_scene_options *options)
+                      bool per_frame, const collide_scene_options *options)
 {
 	run_result r = {0};
 	plait_world_def def = plait_default_world_def();
@@ -88,11 +89,16 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 			r.failed = true;
 			break;
 		}
-		stepping += now_seconds() - start;
+		double frame_seconds = now_seconds() - start;
+		stepping += frame_seconds;
 		if (f == 0) {
 			r.first_ms = 1e3 * (now_seconds() - start);
 		}
 		plait_frame_stats stats = plait_world_get_stats(scene.world);
+		if (per_frame) {
+			printf("  frame=%d ms=%.2f collision_ms=%.2f contacts=%d ccd_hits=%d failsafe=%d\n", f + 1,
+			       1e3 * frame_seconds, stats.collision_ms, stats.contacts, stats.ccd_hits, stats.failsafe);
+		}
 		r.collision_ms += stats.collision_ms;
 		r.ccd_hits += stats.ccd_hits;
 		r.failsafe += stats.failsafe;
@@ -147,7 +153,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 
 int main(int argc, char **argv)
 {
-	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false;
+	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false, per_frame = false;
 	int n = 0, frames = 0, runs = 1, threads = 1;
 	collide_scene_options options = collide_scene_default_options();
 	for (int a = 1; a < argc; ++a) {
@@ -172,6 +178,8 @@ int main(int argc, char **argv)
 			options.stiff = true;
 		} else if (strcmp(argv[a], "--verbose") == 0) {
 			verbose = true;
+		} else if (strcmp(argv[a], "--per-frame") == 0) {
+			per_frame = true;
 		} else {
 			int k = 0;
 			while (k < SCENE_COUNT && strcmp(argv[a], collide_scene_names[k]) != 0) {
@@ -181,7 +189,7 @@ int main(int argc, char **argv)
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
 				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--stiff] [--verbose]\n"
+				        "[--stiff] [--verbose] [--per-frame]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
@@ -196,7 +204,7 @@ int main(int argc, char **argv)
 		double *ms = malloc(sizeof(double) * (size_t)runs);
 		run_result last = {0};
 		for (int r = 0; r < runs; ++r) {
-			last = run((collide_scene_kind)k, n, frames, threads, check, verbose, &options);
+			last = run((collide_scene_kind)k, n, frames, threads, check, verbose, per_frame, &options);
 			ms[r] = last.ms;
 		}
 		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
