@@ -543,7 +543,14 @@ static triangle_normals triangle_normals_of(const plait_patch_paths *paths, cons
 	triangle_normals t = {{v3_cross(e1a, e2a), v3_scale(v3_add(v3_cross(e1a, e2b), v3_cross(e1b, e2a)), 0.5f),
 	                       v3_cross(e1b, e2b)},
 	                      0.0f};
-	float e1 = fmaxf(v3_length(e1a), v3_length(e1b)), e2 = fmaxf(v3_length(e2a), v3_length(e2b));
+	float e1_sq = fmaxf(v3_length_sq(e1a), v3_length_sq(e1b));
+	float e2_sq = fmaxf(v3_length_sq(e2a), v3_length_sq(e2b));
+	if (paths->guard == NULL) {
+		/* The rounding alone, e1 e2 bounded by (e1^2 + e2^2) / 2: no square roots. */
+		t.rho = 0.5e-6f * (e1_sq + e2_sq);
+		return t;
+	}
+	float e1 = sqrtf(e1_sq), e2 = sqrtf(e2_sq);
 	float g0 = guard(paths, v[0]), s1 = g0 + guard(paths, v[1]), s2 = g0 + guard(paths, v[2]);
 	/* (e1 + d1) x (e2 + d2) - e1 x e2, with |d1| <= s1, |d2| <= s2; and the rounding. */
 	t.rho = s1 * e2 + e1 * s2 + s1 * s2 + 1e-6f * e1 * e2;
@@ -555,16 +562,19 @@ static triangle_normals triangle_normals_of(const plait_patch_paths *paths, cons
  * times that, before the guards' rho: tan of its angle is at most (m tan + rho) / (m - rho). */
 static plait_cone cone_round(vec3 axis, const triangle_normals *t, int count)
 {
-	float widest = 0.0f; /* tan */
+	/* tan^2 of each coefficient's angle, |n x axis|^2 / (n . axis)^2: one square root at the
+	 * end rather than one per coefficient. */
+	float widest_sq = 0.0f;
 	for (int k = 0; k < count; ++k) {
 		for (int m = 0; m < 3; ++m) {
 			float along = v3_dot(t[k].n[m], axis);
 			if (!(along > 0.0f)) {
 				return no_cone(); /* at or past a right angle (or the triangle collapses) */
 			}
-			widest = fmaxf(widest, v3_length(v3_cross(t[k].n[m], axis)) / along);
+			widest_sq = fmaxf(widest_sq, v3_length_sq(v3_cross(t[k].n[m], axis)) / (along * along));
 		}
 	}
+	float widest = sqrtf(widest_sq);
 	float tangent = 0.0f;
 	for (int k = 0; k < count; ++k) {
 		float least = fminf(v3_dot(t[k].n[0], axis), fminf(v3_dot(t[k].n[1], axis), v3_dot(t[k].n[2], axis)));
