@@ -50,6 +50,9 @@
 #include "collision/mesh_shape.h"
 #include "collision/smooth_reach.h"
 
+#include <stdatomic.h>
+#include <string.h>
+
 /* The share of the contact distance the argument leans on: the collider pass pushes vertices
  * out to all of it, friction and other colliders can take back some. */
 #define SMOOTH_MARGIN 0.5f
@@ -228,50 +231,92 @@ static bool outgrown(const plait_particles *p, const plait_mesh_contacts *mc, in
  * listing the bound has slack, and the list covers only while no edge outgrows it
  * (plait_mesh_contacts_list_covers); the failsafe's traversal measures the substep's end,
  * with none. */
-void plait_mesh_contacts_measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, float slack)
+/* The passes over one object's elements below, each element alone: on the workers. */
+typedef struct edges_job {
+	const plait_sim *sim;
+	plait_mesh_contacts *mc;
+	float slack;
+	_Atomic int outgrown;
+} edges_job;
+
+#define EDGES_GRAIN 4096
+
+static void longest_edges(void *context, int begin, int end)
 {
-	const plait_particles *p = &sim->particles;
-	for (int k = 0; k < mc->object_count; ++k) {
-		const collision_object *o = &mc->objects[k];
-		if (!meets_collider_surfaces(sim, mc, o)) {
-			continue;
-		}
-		for (int e = o->first; e < o->first + o->count; ++e) {
-			const element *el = &mc->elements[e];
-			mc->pair_reach[e] = slack * sqrtf(longest_edge_sq(p, el));
-		}
-		if (slack > 1.0f) {
-			for (int e = o->first; e < o->first + o->count; ++e) {
-				mc->cloth_bound[e] = mc->pair_reach[e];
-			}
-		}
-		/* The neighbours' bounds, read from cloth_bound (at a listing) or from a second pass. */
-		const float *bound = slack > 1.0f ? mc->cloth_bound : mc->pair_reach;
-		for (int e = o->first; e < o->first + o->count; ++e) {
-			mc->cloth_bound_scratch[e] = reach_over_neighbours(mc, bound, e);
-		}
-		for (int e = o->first; e < o->first + o->count; ++e) {
-			mc->pair_reach[e] = mc->cloth_bound_scratch[e];
+	edges_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	for (int e = begin; e < end; ++e) {
+		mc->pair_reach[e] = job->slack * sqrtf(longest_edge_sq(&job->sim->particles, &mc->elements[e]));
+		if (job->slack > 1.0f) {
+			mc->cloth_bound[e] = mc->pair_reach[e];
 		}
 	}
 }
 
-/* Whether every cloth edge that meets filtered colliders is still within its bound. */
-bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_contacts *mc)
+/* The neighbours' bounds, read from cloth_bound (at a listing) or from pair_reach. */
+static void neighbours_reach(void *context, int begin, int end)
 {
-	const plait_particles *p = &sim->particles;
+	edges_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	const float *bound = job->slack > 1.0f ? mc->cloth_bound : mc->pair_reach;
+	for (int e = begin; e < end; ++e) {
+		mc->cloth_bound_scratch[e] = reach_over_neighbours(mc, bound, e);
+	}
+}
+
+static void take_scratch(void *context, int begin, int end)
+{
+	edges_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	memcpy(mc->pair_reach + begin, mc->cloth_bound_scratch + begin, sizeof(float) * (size_t)(end - begin));
+}
+
+static void find_outgrown(void *context, int begin, int end)
+{
+	edges_job *job = context;
+	for (int e = begin; e < end; ++e) {
+		if (outgrown(&job->sim->particles, job->mc, e)) {
+			atomic_store_explicit(&job->outgrown, 1, memory_order_relaxed);
+			return;
+		}
+	}
+}
+
+/* The longest edge of each cloth triangle and curve segment that meets filtered colliders, into
+ * mc->cloth_bound (grown by `slack`), and each one's D for its element pairs with them, into
+ * mc->pair_reach: the largest bound over it and the triangles across its edges (an edge-edge
+ * pair is owned by one of the two triangles of its cloth edge, and must hold for both). At a
+ * listing the bound has slack, and the list covers only while no edge outgrows it
+ * (plait_mesh_contacts_list_covers); the failsafe's traversal measures the substep's end,
+ * with none. */
+void plait_mesh_contacts_measure_cloth_edges(plait_sim *sim, plait_mesh_contacts *mc, float slack)
+{
+	edges_job job = {.sim = sim, .mc = mc, .slack = slack};
 	for (int k = 0; k < mc->object_count; ++k) {
 		const collision_object *o = &mc->objects[k];
 		if (!meets_collider_surfaces(sim, mc, o)) {
 			continue;
 		}
-		for (int e = o->first; e < o->first + o->count; ++e) {
-			if (outgrown(p, mc, e)) {
-				return false;
-			}
+		int first = o->first, last = o->first + o->count;
+		plait_parallel_for(&sim->parallel, longest_edges, &job, first, last, EDGES_GRAIN);
+		plait_parallel_for(&sim->parallel, neighbours_reach, &job, first, last, EDGES_GRAIN);
+		plait_parallel_for(&sim->parallel, take_scratch, &job, first, last, EDGES_GRAIN);
+	}
+}
+
+/* Whether every cloth edge that meets filtered colliders is still within its bound. */
+bool plait_mesh_contacts_cloth_edges_within_bounds(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	edges_job job = {.sim = sim, .mc = mc, .slack = 1.0f};
+	atomic_init(&job.outgrown, 0);
+	for (int k = 0; k < mc->object_count; ++k) {
+		const collision_object *o = &mc->objects[k];
+		if (meets_collider_surfaces(sim, mc, o)) {
+			plait_parallel_for(&sim->parallel, find_outgrown, &job, o->first, o->first + o->count,
+			                   EDGES_GRAIN);
 		}
 	}
-	return true;
+	return !atomic_load_explicit(&job.outgrown, memory_order_relaxed);
 }
 
 int plait_mesh_contacts_mark_outgrown(const plait_sim *sim, const plait_mesh_contacts *mc, uint8_t *marked)

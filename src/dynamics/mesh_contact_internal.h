@@ -204,6 +204,13 @@ typedef struct plait_mesh_contacts {
 	sweep_hit *piece_hits;
 	int *piece_hit_count, *piece_swept;
 	bool *piece_full;
+	/* The re-listing around strayed vertices on the workers (plait_mesh_contacts_relist_on_workers):
+	 * the flagged elements in order, cut into runs with a list each, and how many pairs the last
+	 * one listed per flagged element (to size the lists). */
+	int *around_elements;
+	int around_count, around_capacity;
+	piece_list *around_lists;
+	float around_pairs_per_element;
 	/* The list holds every pair that can touch or cross as long as every vertex keeps within its
 	 * guard of the straight path it was on at the gather, for LIST_SUBSTEPS substeps after the
 	 * gather's (plait_mesh_contacts_gather, plait_mesh_contacts_list_covers). */
@@ -401,9 +408,9 @@ bool plait_mesh_contacts_build_collider_features(plait_sim *sim, plait_mesh_cont
                                                  const plait_triangle_edge *edges, int edge_count);
 /* Each cloth element's D against filtered colliders (mc->pair_reach); at a listing (slack > 1)
  * also their bounds (mc->cloth_bound). */
-void plait_mesh_contacts_measure_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc, float slack);
+void plait_mesh_contacts_measure_cloth_edges(plait_sim *sim, plait_mesh_contacts *mc, float slack);
 /* Whether every cloth edge that meets filtered colliders is still within its bound. */
-bool plait_mesh_contacts_cloth_edges_within_bounds(const plait_sim *sim, const plait_mesh_contacts *mc);
+bool plait_mesh_contacts_cloth_edges_within_bounds(plait_sim *sim, plait_mesh_contacts *mc);
 /* Flags (marked[], per particle) the vertices of each cloth element whose edge outgrew its
  * bound and of the elements across its edges (whose D reads its bound); returns how many were
  * not flagged yet. */
@@ -433,6 +440,10 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc);
  * plait_mesh_contacts_list_covers_except): they take new paths, and their pairs are listed
  * again. */
 void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc);
+/* Its queries on the workers, the pairs appended to pass's list in the order
+ * plait_mesh_contacts_query_around would list them; false (nothing listed) when they cannot run
+ * there (out of memory, too few flagged elements). */
+bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass);
 /* mc->element_around from mc->around: the elements with a flagged vertex. */
 void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
 /* Each element pair with a flagged element (mc->element_around) whose boxes overlap (between
@@ -440,14 +451,18 @@ void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
  * numbers: each flagged element's box queried against the trees of the objects it meets. */
 void plait_mesh_contacts_query_around(const plait_sim *sim, const plait_mesh_contacts *mc,
                                       bool with_allowance, plait_element_pair_visitor *visit, void *context);
+/* The same for flagged element e alone. */
+void plait_mesh_contacts_query_around_element(const plait_sim *sim, const plait_mesh_contacts *mc, int e,
+                                              bool with_allowance, plait_element_pair_visitor *visit,
+                                              void *context);
 /* Whether the list still holds every pair that can touch or cross (at the substep's start and
  * now). */
-bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc);
+bool plait_mesh_contacts_list_covers(plait_sim *sim, plait_mesh_contacts *mc);
 /* Whether the list holds every pair of two vertices that kept within their guards over the
  * substep, with the others flagged in strayed[] (per particle; set to 1, never cleared here)
  * and counted into *stray_count. False (nothing flagged) when it holds no pair at all: out of
  * its substeps, or a filtered collider's bound outgrown. */
-bool plait_mesh_contacts_list_covers_except(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
+bool plait_mesh_contacts_list_covers_except(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
                                             int *stray_count);
 
 /* mesh_contact_pieces.c */

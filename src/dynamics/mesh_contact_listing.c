@@ -4,6 +4,7 @@
 
 #include "collision/closest.h"
 
+#include <stdatomic.h>
 #include <string.h>
 
 /* ---- Element boxes and the traversal of objects ---------------------------------------------- */
@@ -19,12 +20,24 @@ void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool
 	fit_boxes(sim, mc, paths, margin, true);
 }
 
-/* As plait_mesh_contacts_fit_boxes; without measure_edges the cloth edges' bounds of the last
- * listing are kept (a re-listing around strayed vertices must decide as the listing did). */
-static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin, bool measure_edges)
+/* Elements' boxes over [begin, end): each element's alone, so on the workers. */
+typedef struct box_job {
+	const plait_sim *sim;
+	plait_mesh_contacts *mc;
+	bool paths;
+	float margin;
+} box_job;
+
+#define FIT_BOX_GRAIN 2048
+
+static void fit_box_range(void *context, int begin, int end)
 {
+	const box_job *job = context;
+	const plait_sim *sim = job->sim;
+	plait_mesh_contacts *mc = job->mc;
+	bool paths = job->paths;
 	const plait_particles *p = &sim->particles;
-	for (int e = 0; e < mc->element_count; ++e) {
+	for (int e = begin; e < end; ++e) {
 		const element *el = &mc->elements[e];
 		vec3 lower = p->point[el->v[0]].x, upper = lower;
 		float radius = 0.0f, guard = 0.0f;
@@ -54,7 +67,7 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 			radius = plait_maxf(radius, p->radius[i]);
 			guard = plait_maxf(guard, mc->guard[i]);
 		}
-		float g = margin;
+		float g = job->margin;
 		if (!paths) {
 			element_shape *shape = &mc->shapes[e];
 			shape->lower = lower;
@@ -88,6 +101,14 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 		mc->lower[e] = v3_sub(lower, v3(g, g, g));
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
 	}
+}
+
+/* As plait_mesh_contacts_fit_boxes; without measure_edges the cloth edges' bounds of the last
+ * listing are kept (a re-listing around strayed vertices must decide as the listing did). */
+static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin, bool measure_edges)
+{
+	box_job job = {sim, mc, paths, margin};
+	plait_parallel_for(&sim->parallel, fit_box_range, &job, 0, mc->element_count, FIT_BOX_GRAIN);
 	if (mc->features != NULL && measure_edges) {
 		plait_mesh_contacts_measure_cloth_edges(sim, mc, paths ? 1.0f : CLOTH_EDGE_SLACK);
 	}
@@ -328,7 +349,48 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
  * paths run straight between those, so they keep as near the vertices' paths. With `strayed`
  * (one flag per particle), the vertices out of their guards are flagged and counted into
  * *stray_count instead: the list then holds every pair of two vertices that are not. */
-static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
+typedef struct holds_job {
+	const plait_sim *sim;
+	const plait_mesh_contacts *mc;
+	uint8_t *strayed;
+	long since;
+	_Atomic int strays; /* newly flagged */
+	_Atomic int out;    /* any out of its guard (without `strayed`) */
+} holds_job;
+
+#define HOLDS_GRAIN 4096
+
+static void holds_range(void *context, int begin, int end)
+{
+	holds_job *job = context;
+	const plait_particles *p = &job->sim->particles;
+	const plait_mesh_contacts *mc = job->mc;
+	int strays = 0;
+	for (int i = begin; i < end; ++i) {
+		if (mc->object_of[i] < 0) {
+			continue;
+		}
+		bool out = false;
+		for (int when = 0; when < 2 && !out; ++when) {
+			/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
+			float along = (float)(job->since - 1 + when);
+			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
+			vec3 stray = v3_sub(x, v3_mul_add(mc->x_gather[i], along, mc->motion[i]));
+			out = v3_length_sq(stray) > mc->guard[i] * mc->guard[i];
+		}
+		if (out) {
+			if (job->strayed == NULL) {
+				atomic_store_explicit(&job->out, 1, memory_order_relaxed);
+				return;
+			}
+			strays += !job->strayed[i];
+			job->strayed[i] = 1;
+		}
+	}
+	atomic_fetch_add_explicit(&job->strays, strays, memory_order_relaxed);
+}
+
+static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
 {
 	mc->paths_kept = false;
 	if (!mc->list_valid) {
@@ -348,26 +410,15 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *s
 		}
 		strays += plait_mesh_contacts_mark_outgrown(sim, mc, strayed);
 	}
-	for (int i = 0; i < p->count; ++i) {
-		if (mc->object_of[i] < 0) {
-			continue;
-		}
-		bool out = false;
-		for (int when = 0; when < 2 && !out; ++when) {
-			/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
-			float along = (float)(since - 1 + when);
-			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
-			vec3 stray = v3_sub(x, v3_mul_add(mc->x_gather[i], along, mc->motion[i]));
-			out = v3_length_sq(stray) > mc->guard[i] * mc->guard[i];
-		}
-		if (out) {
-			if (strayed == NULL) {
-				return false;
-			}
-			strays += !strayed[i];
-			strayed[i] = 1;
-		}
+	/* Each vertex alone, on the workers; the count is a sum, the same in any order. */
+	holds_job job = {.sim = sim, .mc = mc, .strayed = strayed, .since = since};
+	atomic_init(&job.strays, 0);
+	atomic_init(&job.out, 0);
+	plait_parallel_for(&sim->parallel, holds_range, &job, 0, p->count, HOLDS_GRAIN);
+	if (atomic_load_explicit(&job.out, memory_order_relaxed)) {
+		return false;
 	}
+	strays += atomic_load_explicit(&job.strays, memory_order_relaxed);
 	if (stray_count != NULL) {
 		*stray_count = strays;
 	}
@@ -377,12 +428,12 @@ static bool list_holds(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *s
 	return since <= mc->list_serves;
 }
 
-bool plait_mesh_contacts_list_covers(const plait_sim *sim, plait_mesh_contacts *mc)
+bool plait_mesh_contacts_list_covers(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	return list_holds(sim, mc, NULL, NULL);
 }
 
-bool plait_mesh_contacts_list_covers_except(const plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
+bool plait_mesh_contacts_list_covers_except(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed,
                                             int *stray_count)
 {
 	return list_holds(sim, mc, strayed, stray_count);
@@ -420,27 +471,35 @@ static void visit_around(int local, void *context)
 	query->visit(e < f ? e : f, e < f ? f : e, query->context);
 }
 
+void plait_mesh_contacts_query_around_element(const plait_sim *sim, const plait_mesh_contacts *mc, int e,
+                                              bool with_allowance, plait_element_pair_visitor *visit,
+                                              void *context)
+{
+	int a = 0;
+	while (a + 1 < mc->object_count && e >= mc->objects[a + 1].first) {
+		++a; /* objects hold consecutive runs of elements, in order */
+	}
+	const collision_object *oa = &mc->objects[a];
+	for (int b = 0; b < mc->object_count; ++b) {
+		bool meet =
+		    b == a ? oa->self : plait_mesh_contacts_objects_meet(sim, mc, a < b ? a : b, a < b ? b : a);
+		if (!meet) {
+			continue;
+		}
+		const collision_object *ob = &mc->objects[b];
+		float margin = with_allowance && b != a ? mc->allowance[a * mc->object_count + b] : 0.0f;
+		around_query query = {context, mc, e, ob->first, visit};
+		plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first, mc->lower[e],
+		                         mc->upper[e], margin, visit_around, &query);
+	}
+}
+
 void plait_mesh_contacts_query_around(const plait_sim *sim, const plait_mesh_contacts *mc,
                                       bool with_allowance, plait_element_pair_visitor *visit, void *context)
 {
-	for (int a = 0; a < mc->object_count; ++a) {
-		const collision_object *oa = &mc->objects[a];
-		for (int e = oa->first; e < oa->first + oa->count; ++e) {
-			if (!mc->element_around[e]) {
-				continue;
-			}
-			for (int b = 0; b < mc->object_count; ++b) {
-				bool meet = b == a ? oa->self
-				                   : plait_mesh_contacts_objects_meet(sim, mc, a < b ? a : b, a < b ? b : a);
-				if (!meet) {
-					continue;
-				}
-				const collision_object *ob = &mc->objects[b];
-				float margin = with_allowance && b != a ? mc->allowance[a * mc->object_count + b] : 0.0f;
-				around_query query = {context, mc, e, ob->first, visit};
-				plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first,
-				                         mc->lower[e], mc->upper[e], margin, visit_around, &query);
-			}
+	for (int e = 0; e < mc->element_count; ++e) {
+		if (mc->element_around[e]) {
+			plait_mesh_contacts_query_around_element(sim, mc, e, with_allowance, visit, context);
 		}
 	}
 }
@@ -488,8 +547,10 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 	                  .out_pairs = &mc->pairs,
 	                  .out_count = &mc->pair_count,
 	                  .out_capacity = &mc->pair_capacity};
-	object_pass objects = {&pass, 0, 0};
-	plait_mesh_contacts_query_around(sim, mc, true, plait_mesh_contacts_visit_object_elements, &objects);
+	if (!(sim->parallel.worker_count > 1 && plait_mesh_contacts_relist_on_workers(sim, mc, &pass))) {
+		object_pass objects = {&pass, 0, 0};
+		plait_mesh_contacts_query_around(sim, mc, true, plait_mesh_contacts_visit_object_elements, &objects);
+	}
 	mc->list_valid = !mc->out_of_memory;
 }
 

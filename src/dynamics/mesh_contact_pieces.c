@@ -24,6 +24,16 @@ void plait_mesh_contacts_free_pieces(plait_mesh_contacts *mc, const plait_alloca
 	plait_free(a, mc->piece_hit_count);
 	plait_free(a, mc->piece_swept);
 	plait_free(a, mc->piece_full);
+	if (mc->around_lists != NULL) {
+		for (int k = 0; k < MAX_PIECES; ++k) {
+			plait_free(a, mc->around_lists[k].pairs);
+		}
+	}
+	plait_free(a, mc->around_lists);
+	plait_free(a, mc->around_elements);
+	mc->around_lists = NULL;
+	mc->around_elements = NULL;
+	mc->around_capacity = mc->around_count = 0;
 	mc->pieces = NULL;
 	mc->piece_nodes = NULL;
 	mc->piece_lists = NULL;
@@ -208,6 +218,150 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 		if (list->count > 0) {
 			memcpy(mc->pairs + mc->pair_count, list->pairs, sizeof *list->pairs * (size_t)list->count);
 			mc->pair_count += list->count;
+		}
+	}
+	return true;
+}
+
+/* ---- Re-listing around strayed vertices on the workers ----------------------------------------- */
+
+/* Flagged elements per run of the re-listing: enough to pay a hand-over. */
+#define AROUND_RUN 32
+
+typedef struct around_job {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+	int run; /* flagged elements per run */
+} around_job;
+
+static void list_around_runs(void *context, int begin, int end)
+{
+	around_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	for (int k = begin; k < end; ++k) {
+		piece_list *list = &mc->around_lists[k];
+		list->count = 0;
+		pair_pass pass = {.sim = job->sim,
+		                  .mc = mc,
+		                  .stage = STAGE_GATHER,
+		                  .around_only = true,
+		                  .out_pairs = &list->pairs,
+		                  .out_count = &list->count,
+		                  .out_capacity = &list->capacity,
+		                  .fixed_capacity = true};
+		object_pass objects = {&pass, 0, 0};
+		int last = (k + 1) * job->run < mc->around_count ? (k + 1) * job->run : mc->around_count;
+		for (int j = k * job->run; j < last && !pass.full; ++j) {
+			plait_mesh_contacts_query_around_element(job->sim, mc, mc->around_elements[j], true,
+			                                         plait_mesh_contacts_visit_object_elements, &objects);
+		}
+		list->full = pass.full;
+	}
+}
+
+/* Room for `count` more pairs after the first `keep` of *pairs (which are kept). */
+static bool grow_pairs(const plait_allocator *a, contact_pair **pairs, int *capacity, int keep, int count)
+{
+	if (keep + count <= *capacity) {
+		return true;
+	}
+	int room = keep + count + (keep + count) / 2;
+	contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)room);
+	if (bigger == NULL) {
+		return false;
+	}
+	if (keep > 0) {
+		memcpy(bigger, *pairs, sizeof *bigger * (size_t)keep);
+	}
+	plait_free(a, *pairs);
+	*pairs = bigger;
+	*capacity = room;
+	return true;
+}
+
+bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	const plait_allocator *a = &sim->allocator;
+	if (mc->around_capacity < mc->element_count) {
+		int *bigger = plait_alloc(a, sizeof(int) * (size_t)mc->element_count);
+		if (bigger == NULL) {
+			return false;
+		}
+		plait_free(a, mc->around_elements);
+		mc->around_elements = bigger;
+		mc->around_capacity = mc->element_count;
+	}
+	if (mc->around_lists == NULL) {
+		mc->around_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->around_lists);
+		if (mc->around_lists == NULL) {
+			return false;
+		}
+	}
+	int count = 0;
+	for (int e = 0; e < mc->element_count; ++e) {
+		if (mc->element_around[e]) {
+			mc->around_elements[count++] = e;
+		}
+	}
+	mc->around_count = count;
+	if (count < 2 * AROUND_RUN) {
+		return false; /* too few to share */
+	}
+	int run = AROUND_RUN;
+	if ((count + run - 1) / run > MAX_PIECES) {
+		run = (count + MAX_PIECES - 1) / MAX_PIECES;
+	}
+	int runs = (count + run - 1) / run;
+	/* Room for each run: twice what the last re-listing listed per flagged element. */
+	float per_element = mc->around_pairs_per_element > 8.0f ? mc->around_pairs_per_element : 8.0f;
+	int room = 64 + (int)(2.0f * per_element * (float)run);
+	for (int k = 0; k < runs; ++k) {
+		piece_list *list = &mc->around_lists[k];
+		if (list->capacity < room) {
+			contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)room);
+			if (bigger == NULL) {
+				return false;
+			}
+			plait_free(a, list->pairs);
+			list->pairs = bigger;
+			list->capacity = room;
+		}
+	}
+	around_job job = {sim, mc, run};
+	plait_parallel_for(&sim->parallel, list_around_runs, &job, 0, runs, 1);
+	int kept = *pass->out_count, total = 0;
+	for (int k = 0; k < runs; ++k) {
+		piece_list *list = &mc->around_lists[k];
+		if (list->full) {
+			/* Again here, where its list may grow. */
+			list->count = 0;
+			pair_pass again = {.sim = sim,
+			                   .mc = mc,
+			                   .stage = STAGE_GATHER,
+			                   .around_only = true,
+			                   .out_pairs = &list->pairs,
+			                   .out_count = &list->count,
+			                   .out_capacity = &list->capacity};
+			object_pass objects = {&again, 0, 0};
+			int last = (k + 1) * run < count ? (k + 1) * run : count;
+			for (int j = k * run; j < last; ++j) {
+				plait_mesh_contacts_query_around_element(sim, mc, mc->around_elements[j], true,
+				                                         plait_mesh_contacts_visit_object_elements, &objects);
+			}
+		}
+		total += list->count;
+	}
+	mc->around_pairs_per_element = (float)total / (float)count;
+	if (!grow_pairs(a, pass->out_pairs, pass->out_capacity, kept, total)) {
+		mc->out_of_memory = true;
+		return true;
+	}
+	for (int k = 0; k < runs; ++k) {
+		const piece_list *list = &mc->around_lists[k];
+		if (list->count > 0) {
+			memcpy(*pass->out_pairs + *pass->out_count, list->pairs,
+			       sizeof *list->pairs * (size_t)list->count);
+			*pass->out_count += list->count;
 		}
 	}
 	return true;
