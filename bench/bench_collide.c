@@ -13,7 +13,8 @@
  * (worst_in_round: the most cloth triangles reaching into a sphere or capsule collider;
  * collider_features: kept/met, the corners and edges of mesh and box colliders that the last
  * listing of each frame met in element pairs with cloth and kept, of all it met there (the
- * others are smooth at the scale of the cloth's triangles), mean over the frames.)
+ * others are smooth at the scale of the cloth's triangles; node pairs where none could be kept
+ * are passed over unmet), mean over the frames.)
  *
  * usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] [--no-check]
  *                      [--self-flag full|vertex_face|vertex] (of the self-colliding cloths)

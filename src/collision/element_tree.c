@@ -123,7 +123,8 @@ static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *
  * `self` when the two trees are one. With pieces != NULL it does not descend below `depth`
  * pair splits: the node pairs it stops at (and the leaf pairs above that depth) go to pieces in
  * the order the full traversal would meet them, and their count is returned (-1 past
- * capacity). With skip (self only), a node's pairs with itself are passed over when it says so. */
+ * capacity). With skip, a node's pairs with itself, or a node pair's, are passed over when it
+ * says so. */
 static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
                     const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
                     float margin, int start_a, int start_b, const plait_node_skip *skip,
@@ -142,7 +143,8 @@ static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const
 		int level = stack[--top], nb = stack[--top], na = stack[--top];
 		const plait_tree_node *a = &tree_a->nodes[na], *b = &tree_b->nodes[nb];
 		bool same = self && na == nb;
-		if (same && skip != NULL && skip->skip(na, skip->context)) {
+		if (skip != NULL && (same ? skip->skip != NULL && skip->skip(na, skip->context)
+		                          : skip->skip_pair != NULL && skip->skip_pair(na, nb, skip->context))) {
 			continue;
 		}
 		if (!same && !boxes_overlap(a->lower, a->upper, b->lower, b->upper, margin)) {
@@ -207,9 +209,10 @@ void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
                                       const vec3 *upper_a, const plait_element_tree *tree_b,
                                       const vec3 *lower_b, const vec3 *upper_b, float margin,
-                                      plait_element_pair_visitor *visit, void *context)
+                                      const plait_node_skip *skip, plait_element_pair_visitor *visit,
+                                      void *context)
 {
-	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, 0, 0, NULL, visit,
+	(void)traverse(tree_a, lower_a, upper_a, tree_b, lower_b, upper_b, false, margin, 0, 0, skip, visit,
 	               context, 0, NULL, 0);
 }
 

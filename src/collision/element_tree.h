@@ -40,15 +40,16 @@ typedef void plait_element_pair_visitor(int a, int b, void *context);
 void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                               plait_element_pair_visitor *visit, void *context);
 
-/* Self-traversals: skip(node, context) says whether the node's pairs with itself (all of them,
- * down to its leaves) may be passed over. Called for each node whose pair with itself a
- * traversal reaches (a piece's first node again), from several threads at once when pieces run
- * side by side: it must answer the same each time. */
+/* What a traversal may pass over. In a self-traversal, skip(node, context) says whether the
+ * node's pairs with itself (all of them, down to its leaves) may be; between two trees,
+ * skip_pair(node_a, node_b, context) whether a node pair's may (either function may be NULL).
+ * Called for the nodes and node pairs a traversal reaches (a piece's first again), from several
+ * threads at once when pieces run side by side: they must answer the same each time. */
 typedef struct plait_node_skip {
 	bool (*skip)(int node, void *context);
+	bool (*skip_pair)(int node_a, int node_b, void *context);
 	void *context;
 } plait_node_skip;
-
 /* As plait_element_tree_pairs, passing over what skip says. */
 void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                                        const plait_node_skip *skip, plait_element_pair_visitor *visit,
@@ -56,11 +57,12 @@ void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec
 
 /* As above between two trees: visit(a, b) with a an element of tree_a, b one of tree_b (each
  * in its own tree's numbering, boxes from its own arrays), for boxes within `margin` of each
- * other. */
+ * other, passing over the node pairs skip says (NULL: none). */
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
                                       const vec3 *upper_a, const plait_element_tree *tree_b,
                                       const vec3 *lower_b, const vec3 *upper_b, float margin,
-                                      plait_element_pair_visitor *visit, void *context);
+                                      const plait_node_skip *skip, plait_element_pair_visitor *visit,
+                                      void *context);
 
 /* Calls visit(e, context) for every element e whose box comes within `margin` of the box
  * [box_lower, box_upper], in the tree's order. Uses the boxes given to the last refit. */
@@ -74,8 +76,7 @@ void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower,
  * and returns how many; -1 when more than capacity. The pairs of all pieces, each traversed by
  * plait_element_tree_piece_pairs and taken in piece order, are the whole traversal's pairs in
  * its order. self and margin as for the two queries above (self: tree_b is tree_a, margin 0);
- * skip as for plait_element_tree_pairs_skipping (NULL: none); uses the node boxes of the last
- * refit. */
+ * skip as for the two queries (NULL: none); uses the node boxes of the last refit. */
 int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
                              float margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
                              int capacity);

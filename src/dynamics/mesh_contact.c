@@ -17,6 +17,7 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		sim->mesh_contacts = mc;
 		sim->mesh_contacts_dirty = true;
 		mc->cull_flat = true;
+		mc->skip_smooth = true;
 		mc->patches_fitted_for = -1;
 	}
 	if (sim->mesh_contacts_dirty) {

@@ -33,6 +33,8 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 		plait_flat_patches_destroy(&mc->objects[k].patches, a);
 		plait_free(a, mc->objects[k].culled);
 		plait_free(a, mc->objects[k].culled_axis);
+		plait_free(a, mc->objects[k].node_floor);
+		plait_free(a, mc->objects[k].node_ceiling);
 	}
 	plait_free(a, mc->objects);
 	plait_free(a, mc->features);
@@ -171,9 +173,11 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				continue;
 			}
 			const plait_material *m = &sim->materials[surface->material];
-			mc->objects[mc->object_count++] = (collision_object){
-			    e,   surface->shape->triangle_count, surface->material, m->self_collide, {0}, -1, {0}, NULL,
-			    NULL};
+			mc->objects[mc->object_count++] = (collision_object){.first = e,
+			                                                     .count = surface->shape->triangle_count,
+			                                                     .material = surface->material,
+			                                                     .self = m->self_collide,
+			                                                     .features = -1};
 			for (int t = 0; t < surface->shape->triangle_count; ++t, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 3;
@@ -199,8 +203,11 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				continue;
 			}
 			const plait_material *m = &sim->materials[chain->material];
-			mc->objects[mc->object_count++] = (collision_object){
-			    e, chain->count - 1, chain->material, m->self_collide, {0}, -1, {0}, NULL, NULL};
+			mc->objects[mc->object_count++] = (collision_object){.first = e,
+			                                                     .count = chain->count - 1,
+			                                                     .material = chain->material,
+			                                                     .self = m->self_collide,
+			                                                     .features = -1};
 			for (int k = 0; k + 1 < chain->count; ++k, ++e) {
 				element *el = &mc->elements[e];
 				el->size = 2;
@@ -218,7 +225,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				if (last == NULL || last->material != p->material[i] || last->first + last->count != e) {
 					/* Loose points never meet their own kind here (particle pairs do). */
 					mc->objects[mc->object_count++] =
-					    (collision_object){e, 0, p->material[i], false, {0}, -1, {0}, NULL, NULL};
+					    (collision_object){.first = e, .material = p->material[i], .features = -1};
 					last = &mc->objects[mc->object_count - 1];
 				}
 				last->count += 1;
@@ -260,6 +267,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 				ok = build_patches(sim, mc, o);
 			}
 		}
+		ok = ok && plait_mesh_contacts_build_node_floors(sim, mc);
 		ok = ok && build_rest_pairs(sim, mc);
 		int objects = mc->object_count;
 		mc->shift = plait_alloc_zero(a, (size_t)objects, sizeof(vec3));

@@ -231,6 +231,102 @@ static bool outgrown(const plait_particles *p, const plait_mesh_contacts *mc, in
  * listing the bound has slack, and the list covers only while no edge outgrows it
  * (plait_mesh_contacts_list_covers); the failsafe's traversal measures the substep's end,
  * with none. */
+/* ---- Node floors and ceilings ------------------------------------------------------------- */
+
+/* Whether collision object o is a filtered collider (its corners and edges have reaches). */
+static bool filtered(const plait_mesh_contacts *mc, const collision_object *o)
+{
+	return mc->features != NULL && o->features >= 0;
+}
+
+/* A cloth's tree: each node's largest pair_reach under it, bottom-up (parents come before
+ * children in the node array). */
+static void fit_ceilings(plait_mesh_contacts *mc, collision_object *o)
+{
+	const plait_element_tree *tree = &o->tree;
+	for (int n = tree->node_count - 1; n >= 0; --n) {
+		const plait_tree_node *node = &tree->nodes[n];
+		float ceiling = 0.0f;
+		if (node->count > 0) {
+			for (int k = node->first; k < node->first + node->count; ++k) {
+				ceiling = plait_maxf(ceiling, mc->pair_reach[o->first + tree->order[k]]);
+			}
+		} else {
+			ceiling = plait_maxf(o->node_ceiling[node->first], o->node_ceiling[node->first + 1]);
+		}
+		o->node_ceiling[n] = ceiling;
+	}
+}
+
+bool plait_mesh_contacts_build_node_floors(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	if (mc->features == NULL) {
+		return true;
+	}
+	for (int k = 0; k < mc->object_count; ++k) {
+		collision_object *o = &mc->objects[k];
+		bool collider = filtered(mc, o), cloth = meets_collider_surfaces(sim, mc, o);
+		if ((!collider && !cloth) || o->tree.node_count == 0) {
+			continue;
+		}
+		float *values = plait_alloc_zero(&sim->allocator, (size_t)o->tree.node_count, sizeof(float));
+		if (values == NULL) {
+			return false;
+		}
+		if (cloth) {
+			o->node_ceiling = values;
+			continue;
+		}
+		o->node_floor = values;
+		const plait_element_tree *tree = &o->tree;
+		for (int n = tree->node_count - 1; n >= 0; --n) {
+			const plait_tree_node *node = &tree->nodes[n];
+			float floor = INFINITY;
+			if (node->count > 0) {
+				for (int q = node->first; q < node->first + node->count; ++q) {
+					const collider_features *f = &mc->features[o->features + tree->order[q]];
+					for (int m = 0; m < 3; ++m) {
+						floor = (f->vertices & (1u << m)) ? plait_minf(floor, f->reach[m]) : floor;
+						floor = (f->edges & (1u << m)) ? plait_minf(floor, f->reach[3 + m]) : floor;
+					}
+				}
+			} else {
+				floor = plait_minf(values[node->first], values[node->first + 1]);
+			}
+			values[n] = floor;
+		}
+	}
+	return true;
+}
+
+/* A node pair of a filtered collider and a cloth whose every element pair would keep no corner
+ * or edge (plait_mesh_contacts_live_features keeps those whose reach the cloth element's D
+ * reaches): the cloth's largest D there short of the collider's least reach. */
+static bool smooth_node_pair(int node_a, int node_b, void *context)
+{
+	const smooth_skip *floors = context;
+	int collider = floors->collider_first ? node_a : node_b, cloth = floors->collider_first ? node_b : node_a;
+	return floors->ceiling[cloth] < floors->floor[collider];
+}
+
+const plait_node_skip *plait_mesh_contacts_smooth_skip(const plait_mesh_contacts *mc, int a, int b,
+                                                       smooth_skip *floors, plait_node_skip *skip)
+{
+	const collision_object *oa = &mc->objects[a], *ob = &mc->objects[b];
+	if (!mc->skip_smooth) {
+		return NULL;
+	}
+	if (oa->node_floor != NULL && ob->node_ceiling != NULL) {
+		*floors = (smooth_skip){oa->node_floor, ob->node_ceiling, true};
+	} else if (ob->node_floor != NULL && oa->node_ceiling != NULL) {
+		*floors = (smooth_skip){ob->node_floor, oa->node_ceiling, false};
+	} else {
+		return NULL;
+	}
+	*skip = (plait_node_skip){NULL, smooth_node_pair, floors};
+	return skip;
+}
+
 /* The passes over one object's elements below, each element alone: on the workers. */
 typedef struct edges_job {
 	const plait_sim *sim;
@@ -301,6 +397,9 @@ void plait_mesh_contacts_measure_cloth_edges(plait_sim *sim, plait_mesh_contacts
 		plait_parallel_for(&sim->parallel, longest_edges, &job, first, last, EDGES_GRAIN);
 		plait_parallel_for(&sim->parallel, neighbours_reach, &job, first, last, EDGES_GRAIN);
 		plait_parallel_for(&sim->parallel, take_scratch, &job, first, last, EDGES_GRAIN);
+		if (o->node_ceiling != NULL) {
+			fit_ceilings(mc, &mc->objects[k]);
+		}
 	}
 }
 
@@ -363,6 +462,9 @@ void plait_mesh_contacts_rebound_cloth_edges(const plait_sim *sim, plait_mesh_co
 		}
 		for (int e = o->first; e < o->first + o->count; ++e) {
 			mc->pair_reach[e] = reach_over_neighbours(mc, mc->cloth_bound, e);
+		}
+		if (o->node_ceiling != NULL) {
+			fit_ceilings(mc, &mc->objects[k]);
 		}
 	}
 }

@@ -59,6 +59,12 @@ typedef struct collision_object {
 	plait_flat_patches patches;
 	uint8_t *culled; /* 1: passed over; 2: and found not flat along this substep's paths */
 	vec3 *culled_axis;
+	/* Per tree node, for traversals between a filtered collider and a cloth or curve (see
+	 * plait_mesh_contacts_smooth_skip): the collider's least smooth reach of the corners and
+	 * edges its elements own under the node; the cloth's largest D (pair_reach) under it. NULL
+	 * when the object has no such part. */
+	float *node_floor;
+	float *node_ceiling;
 } collision_object;
 
 /* A rigid mesh collider's corners and edges (plait_collider.first). Each element's own vertices
@@ -228,6 +234,7 @@ typedef struct plait_mesh_contacts {
 	long culled_patches;    /* patches the gathers passed over (a count) */
 	long unflattened;       /* of those, the ones the failsafe swept (a count) */
 	bool cull_flat;
+	bool skip_smooth; /* traversals pass over smooth node pairs (plait_mesh_contacts_smooth_skip) */
 	vec3 *sweep_end, *sweep_motion;
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
 	long listings;                      /* gathers since the stage was made */
@@ -419,6 +426,18 @@ int plait_mesh_contacts_mark_outgrown(const plait_sim *sim, const plait_mesh_con
  * (with slack), the others kept, and every D (pair_reach) taken from the bounds, as at the
  * listing (a failsafe's traversal since may have measured them without slack). */
 void plait_mesh_contacts_rebound_cloth_edges(const plait_sim *sim, plait_mesh_contacts *mc);
+/* The collider trees' node floors and the cloth trees' node ceilings' room (after the trees are
+ * built), and the floors, which do not change; false when out of memory. */
+bool plait_mesh_contacts_build_node_floors(plait_sim *sim, plait_mesh_contacts *mc);
+/* Passing over node pairs of objects a and b where no corner or edge of the collider can meet
+ * the cloth (every element pair there would keep none): the skip for their traversal, in
+ * *skip with its context in *floors, or NULL when they are not such a pair. */
+typedef struct smooth_skip {
+	const float *floor, *ceiling;
+	bool collider_first; /* the collider's tree is the traversal's tree a */
+} smooth_skip;
+const plait_node_skip *plait_mesh_contacts_smooth_skip(const plait_mesh_contacts *mc, int a, int b,
+                                                       smooth_skip *floors, plait_node_skip *skip);
 /* The corners and edges of filtered collider element c that meet cloth element e (bits). */
 void plait_mesh_contacts_live_features(const plait_mesh_contacts *mc, int c, int e, uint8_t *vertices,
                                        uint8_t *edges);

@@ -208,7 +208,7 @@ void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pa
 			bool gather = pass->stage == STAGE_GATHER;
 			flat_skip flat = {&oa->patches, &mc->patch_paths, gather ? oa->culled : NULL,
 			                  gather ? oa->culled_axis : NULL};
-			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
+			plait_node_skip skip = {plait_mesh_contacts_skip_flat, NULL, &flat};
 			plait_element_tree_pairs_skipping(&oa->tree, la, ua,
 			                                  plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
 			                                  plait_mesh_contacts_visit_object_elements, &self);
@@ -219,9 +219,12 @@ void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pa
 			}
 			const collision_object *ob = &mc->objects[b];
 			object_pass between = {pass, oa->first, ob->first};
+			smooth_skip floors;
+			plait_node_skip smooth;
 			plait_element_tree_pairs_between(&oa->tree, la, ua, &ob->tree, mc->lower + ob->first,
 			                                 mc->upper + ob->first,
 			                                 plait_mesh_contacts_listing_margin(mc, pass, a, b),
+			                                 plait_mesh_contacts_smooth_skip(mc, a, b, &floors, &smooth),
 			                                 plait_mesh_contacts_visit_object_elements, &between);
 		}
 	}

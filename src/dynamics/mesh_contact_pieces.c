@@ -77,13 +77,16 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	bool gather = pass->stage == STAGE_GATHER;
 	flat_skip flat = {&oa->patches, &mc->patch_paths, gather ? oa->culled : NULL,
 	                  gather ? oa->culled_axis : NULL};
-	plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
-	plait_element_tree_piece_pairs(&oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree,
-	                               mc->lower + ob->first, mc->upper + ob->first, self,
-	                               self ? 0.0f
-	                                    : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
-	                               self && plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
-	                               piece->node, plait_mesh_contacts_visit_object_elements, &o);
+	plait_node_skip skip = {plait_mesh_contacts_skip_flat, NULL, &flat};
+	smooth_skip floors;
+	plait_node_skip smooth;
+	plait_element_tree_piece_pairs(
+	    &oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree, mc->lower + ob->first,
+	    mc->upper + ob->first, self,
+	    self ? 0.0f : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
+	    self ? (plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL)
+	         : plait_mesh_contacts_smooth_skip(mc, piece->a, piece->b, &floors, &smooth),
+	    piece->node, plait_mesh_contacts_visit_object_elements, &o);
 }
 
 static void list_pieces(void *context, int begin, int end)
@@ -123,12 +126,15 @@ bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *m
 			pair_pass margin_pass = {.stage = of};
 			flat_skip flat = {&oa->patches, &mc->patch_paths, of == STAGE_GATHER ? oa->culled : NULL,
 			                  of == STAGE_GATHER ? oa->culled_axis : NULL};
-			plait_node_skip skip = {plait_mesh_contacts_skip_flat, &flat};
+			plait_node_skip skip = {plait_mesh_contacts_skip_flat, NULL, &flat};
+			smooth_skip floors;
+			plait_node_skip smooth;
 			int n = plait_element_tree_split(
 			    &oa->tree, &ob->tree, a == b,
 			    a == b ? 0.0f : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b),
-			    a == b && plait_mesh_contacts_culls_flat(mc, &margin_pass) ? &skip : NULL, PIECE_DEPTH, nodes,
-			    MAX_PIECES - count);
+			    a == b ? (plait_mesh_contacts_culls_flat(mc, &margin_pass) ? &skip : NULL)
+			           : plait_mesh_contacts_smooth_skip(mc, a, b, &floors, &smooth),
+			    PIECE_DEPTH, nodes, MAX_PIECES - count);
 			fits = n >= 0;
 			for (int k = 0; k < n; ++k) {
 				gather_piece piece = {a, b, {nodes[k][0], nodes[k][1]}};
