@@ -141,6 +141,7 @@ typedef struct gather_piece {
 typedef struct piece_list {
 	contact_pair *pairs;
 	int count, capacity;
+	int needed; /* pairs it would have listed, had it room */
 	bool full;
 	int features_kept, features_left_out;
 } piece_list;
@@ -323,10 +324,12 @@ typedef struct pair_pass {
 	bool failed;
 	int swept; /* STAGE_FAILSAFE: primitive pairs swept */
 	/* STAGE_GATHER: where the listed pairs go; with fixed_capacity (on a worker, where the
-	 * allocator may not be called) a full list sets `full` instead of growing. */
+	 * allocator may not be called) a full list sets `full` instead of growing, and counts the
+	 * pairs that found no room into `overflow`. */
 	contact_pair **out_pairs;
 	int *out_count, *out_capacity;
 	bool fixed_capacity, full;
+	int overflow;
 	int features_kept, features_left_out; /* STAGE_GATHER: see plait_mesh_contacts */
 	/* STAGE_FAILSAFE on a worker: crossings go here (room for HIT_ROOM; `full` past it) instead
 	 * of into the impact zones. */

@@ -123,6 +123,7 @@ static bool add_pair(pair_pass *pass, const contact_pair *pair)
 {
 	if (pass->fixed_capacity && *pass->out_count == *pass->out_capacity) {
 		pass->full = true;
+		pass->overflow += 1;
 		return false;
 	}
 	if (!add_pair_to(pass->sim, pass->out_pairs, pass->out_count, pass->out_capacity, pair)) {

@@ -67,6 +67,7 @@ bool plait_mesh_contacts_reserve_pieces(plait_mesh_contacts *mc, const plait_all
 typedef struct piece_job {
 	plait_sim *sim;
 	plait_mesh_contacts *mc;
+	bool again;
 } piece_job;
 
 void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, const gather_piece *piece)
@@ -89,12 +90,17 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	    piece->node, plait_mesh_contacts_visit_object_elements, &o);
 }
 
+/* Lists pieces [begin, end) into their lists (only those that filled theirs up before, when
+ * job->again). */
 static void list_pieces(void *context, int begin, int end)
 {
 	piece_job *job = context;
 	plait_mesh_contacts *mc = job->mc;
 	for (int k = begin; k < end; ++k) {
 		piece_list *list = &mc->piece_lists[k];
+		if (job->again && !list->full) {
+			continue;
+		}
 		list->count = 0;
 		pair_pass pass = {.sim = job->sim,
 		                  .mc = mc,
@@ -105,9 +111,28 @@ static void list_pieces(void *context, int begin, int end)
 		                  .fixed_capacity = true};
 		plait_mesh_contacts_list_piece(mc, &pass, &mc->pieces[k]);
 		list->full = pass.full;
+		list->needed = list->count + pass.overflow;
 		list->features_kept = pass.features_kept;
 		list->features_left_out = pass.features_left_out;
 	}
+}
+
+/* Room for `room` pairs in a piece's list (its pairs need not be kept); false when out of
+ * memory. Grown by half again, so that lists whose length wavers are not made anew each time. */
+static bool piece_room(const plait_allocator *a, piece_list *list, int room)
+{
+	if (list->capacity >= room) {
+		return true;
+	}
+	int capacity = room + room / 2;
+	contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)capacity);
+	if (bigger == NULL) {
+		return false;
+	}
+	plait_free(a, list->pairs);
+	list->pairs = bigger;
+	list->capacity = capacity;
+	return true;
 }
 
 /* Cuts the traversals of stage `of` into mc->pieces (piece_count 0 when they do not fit); returns
@@ -176,23 +201,33 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 	for (int k = 0; k < mc->piece_count; ++k) {
 		piece_list *list = &mc->piece_lists[k];
 		int room = same_cut ? 64 + list->count + list->count / 2 : 64 + 2 * mc->last_listed / mc->piece_count;
-		if (list->capacity < room) {
-			contact_pair *bigger = plait_alloc_zero(a, (size_t)room, sizeof *bigger);
-			if (bigger == NULL) {
-				return false;
-			}
-			plait_free(a, list->pairs);
-			list->pairs = bigger;
-			list->capacity = room;
+		if (!piece_room(a, list, room)) {
+			return false;
 		}
 	}
-	piece_job job = {sim, mc};
+	piece_job job = {sim, mc, false};
 	plait_parallel_for(&sim->parallel, list_pieces, &job, 0, mc->piece_count, 1);
+	/* The pieces that ran out of room know now how much they need: listed again side by side
+	 * (the same pairs: a piece's list depends on nothing but the piece). */
+	bool any_full = false;
+	for (int k = 0; k < mc->piece_count; ++k) {
+		piece_list *list = &mc->piece_lists[k];
+		if (list->full) {
+			any_full = true;
+			if (!piece_room(a, list, list->needed)) {
+				return false;
+			}
+		}
+	}
+	if (any_full) {
+		job.again = true;
+		plait_parallel_for(&sim->parallel, list_pieces, &job, 0, mc->piece_count, 1);
+	}
 	int total = 0;
 	for (int k = 0; k < mc->piece_count; ++k) {
 		piece_list *list = &mc->piece_lists[k];
 		if (list->full) {
-			/* Again here, where its list may grow. */
+			/* Again here, where its list may grow (a piece that still found no room). */
 			list->count = 0;
 			pair_pass again = {.sim = sim,
 			                   .mc = mc,
@@ -201,6 +236,7 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 			                   .out_count = &list->count,
 			                   .out_capacity = &list->capacity};
 			plait_mesh_contacts_list_piece(mc, &again, &mc->pieces[k]);
+			list->full = false;
 			list->features_kept = again.features_kept;
 			list->features_left_out = again.features_left_out;
 		}
@@ -209,7 +245,7 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 		total += list->count;
 	}
 	if (total > mc->pair_capacity) {
-		contact_pair *bigger = plait_alloc_zero(a, (size_t)total, sizeof *bigger);
+		contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)total);
 		if (bigger == NULL) {
 			mc->out_of_memory = true;
 			return true;
