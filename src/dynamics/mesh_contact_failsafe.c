@@ -325,24 +325,37 @@ static void sweep_listed(plait_mesh_contacts *mc, pair_pass *pass, int begin, in
 	}
 }
 
+/* What a sweep on the workers sweeps: the listed pairs, the traversal, or the pairs around
+ * flagged vertices. */
+typedef enum sweep_kind { SWEEP_LIST, SWEEP_TRAVERSAL, SWEEP_AROUND } sweep_kind;
+
 typedef struct sweep_job {
 	plait_sim *sim;
 	plait_mesh_contacts *mc;
 	float distance;
-	bool from_list;
-	int chunk; /* from_list: listed pairs a piece */
+	sweep_kind kind;
+	int chunk; /* SWEEP_LIST: listed pairs a piece; SWEEP_AROUND: flagged elements a piece */
 } sweep_job;
 
-/* Piece k of a sweep: listed pairs [k chunk, (k + 1) chunk), or piece k of the traversal. */
+/* Piece k of a sweep: listed pairs [k chunk, (k + 1) chunk), piece k of the traversal, or the
+ * pairs of flagged elements [k chunk, (k + 1) chunk) (mc->around_elements). */
 static void sweep_piece(const sweep_job *job, pair_pass *pass, int k)
 {
 	plait_mesh_contacts *mc = job->mc;
-	if (job->from_list) {
+	if (job->kind == SWEEP_LIST) {
 		int begin = k * job->chunk,
 		    end = begin + job->chunk < mc->pair_count ? begin + job->chunk : mc->pair_count;
 		sweep_listed(mc, pass, begin, end);
-	} else {
+	} else if (job->kind == SWEEP_TRAVERSAL) {
 		plait_mesh_contacts_list_piece(mc, pass, &mc->pieces[k]);
+	} else {
+		int begin = k * job->chunk,
+		    end = begin + job->chunk < mc->around_count ? begin + job->chunk : mc->around_count;
+		object_pass objects = {pass, 0, 0};
+		for (int j = begin; j < end; ++j) {
+			plait_mesh_contacts_query_around_element(job->sim, mc, mc->around_elements[j], false,
+			                                         plait_mesh_contacts_visit_object_elements, &objects);
+		}
 	}
 }
 
@@ -363,18 +376,26 @@ static void sweep_pieces(void *context, int begin, int end)
 	}
 }
 
-/* The failsafe's sweep of the listed pairs (from_list) or its traversal, on the workers: each
- * piece keeps its crossings, which then join their impact zones here in piece order, the order
- * one thread meets them in (a piece that found too many is swept again here). Adds to pass's
- * hits and swept counts; false (nothing swept) when it cannot run there. */
-static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass, bool from_list)
+/* The failsafe's sweep of the listed pairs, its traversal or the pairs around flagged
+ * vertices (mc->element_around marked), on the workers: each piece keeps its crossings, which
+ * then join their impact zones here in piece order, the order one thread meets them in (a piece
+ * that found too many is swept again here). Adds to pass's hits and swept counts; false
+ * (nothing swept) when it cannot run there. */
+static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass, sweep_kind kind)
 {
 	if (!plait_mesh_contacts_reserve_pieces(mc, &sim->allocator)) {
 		return false;
 	}
-	sweep_job job = {sim, mc, pass->failsafe_distance, from_list, 0};
+	sweep_job job = {sim, mc, pass->failsafe_distance, kind, 0};
 	int pieces;
-	if (from_list) {
+	if (kind == SWEEP_AROUND) {
+		int count = plait_mesh_contacts_collect_around(sim, mc);
+		if (count < 2 * AROUND_RUN) {
+			return false; /* too few to share (or out of memory) */
+		}
+		job.chunk = count > AROUND_RUN * MAX_PIECES ? (count + MAX_PIECES - 1) / MAX_PIECES : AROUND_RUN;
+		pieces = (count + job.chunk - 1) / job.chunk;
+	} else if (kind == SWEEP_LIST) {
 		job.chunk = 4096;
 		if (mc->pair_count > job.chunk * MAX_PIECES) {
 			job.chunk = (mc->pair_count + MAX_PIECES - 1) / MAX_PIECES;
@@ -412,11 +433,14 @@ static bool sweep_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass 
 
 /* Sweeps every primitive pair with a vertex flagged in mc->around, from the substep's start to
  * now: each element with such a vertex, its box around its paths queried against the trees of
- * the objects it meets, in element order (on the calling thread: the vertices are few). */
+ * the objects it meets, in element order (on the workers when there are enough of them). */
 static void sweep_around(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
 {
 	plait_mesh_contacts_fit_boxes(sim, mc, true, pass->failsafe_distance);
 	plait_mesh_contacts_mark_elements(mc);
+	if (sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, pass, SWEEP_AROUND)) {
+		return;
+	}
 	object_pass objects = {pass, 0, 0};
 	plait_mesh_contacts_query_around(sim, mc, false, plait_mesh_contacts_visit_object_elements, &objects);
 }
@@ -531,7 +555,7 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 	bool flat_checked = from_list && check_passed_over(sim, mc);
 	sweep_rest_pairs(&pass, flat_checked);
 	if (from_list) {
-		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, true))) {
+		if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, SWEEP_LIST))) {
 			sweep_listed(mc, &pass, 0, mc->pair_count);
 		}
 		if (flat_checked) {
@@ -551,7 +575,7 @@ static int find_crossings(plait_sim *sim, plait_mesh_contacts *mc, float distanc
 		plait_mesh_contacts_fit_patches(sim, mc, &paths, STAGE_FAILSAFE);
 	}
 	int before = pass.swept;
-	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, false))) {
+	if (!(sim->parallel.worker_count > 1 && sweep_on_workers(sim, mc, &pass, SWEEP_TRAVERSAL))) {
 		plait_mesh_contacts_traverse_objects(mc, &pass);
 	}
 	mc->traversal_sweeps = pass.swept - before;

@@ -466,6 +466,12 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc);
  * plait_mesh_contacts_query_around would list them; false (nothing listed) when they cannot run
  * there (out of memory, too few flagged elements). */
 bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass);
+/* Flagged elements per piece of the work around strayed vertices on the workers: enough to pay
+ * a hand-over. */
+#define AROUND_RUN 32
+/* The flagged elements (mc->element_around) into mc->around_elements in order; their count, or
+ * -1 when out of memory. */
+int plait_mesh_contacts_collect_around(plait_sim *sim, plait_mesh_contacts *mc);
 /* mc->element_around from mc->around: the elements with a flagged vertex. */
 void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
 /* Each element pair with a flagged element (mc->element_around) whose boxes overlap (between

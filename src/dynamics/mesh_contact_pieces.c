@@ -267,13 +267,11 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 
 /* ---- Re-listing around strayed vertices on the workers ----------------------------------------- */
 
-/* Flagged elements per run of the re-listing: enough to pay a hand-over. */
-#define AROUND_RUN 32
-
 typedef struct around_job {
 	plait_sim *sim;
 	plait_mesh_contacts *mc;
-	int run; /* flagged elements per run */
+	int run;    /* flagged elements per run */
+	bool again; /* only the runs that ran out of room */
 } around_job;
 
 static void list_around_runs(void *context, int begin, int end)
@@ -282,6 +280,9 @@ static void list_around_runs(void *context, int begin, int end)
 	plait_mesh_contacts *mc = job->mc;
 	for (int k = begin; k < end; ++k) {
 		piece_list *list = &mc->around_lists[k];
+		if (job->again && !list->full) {
+			continue;
+		}
 		list->count = 0;
 		pair_pass pass = {.sim = job->sim,
 		                  .mc = mc,
@@ -293,11 +294,12 @@ static void list_around_runs(void *context, int begin, int end)
 		                  .fixed_capacity = true};
 		object_pass objects = {&pass, 0, 0};
 		int last = (k + 1) * job->run < mc->around_count ? (k + 1) * job->run : mc->around_count;
-		for (int j = k * job->run; j < last && !pass.full; ++j) {
+		for (int j = k * job->run; j < last; ++j) {
 			plait_mesh_contacts_query_around_element(job->sim, mc, mc->around_elements[j], true,
 			                                         plait_mesh_contacts_visit_object_elements, &objects);
 		}
 		list->full = pass.full;
+		list->needed = list->count + pass.overflow;
 	}
 }
 
@@ -321,23 +323,17 @@ static bool grow_pairs(const plait_allocator *a, contact_pair **pairs, int *capa
 	return true;
 }
 
-bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+int plait_mesh_contacts_collect_around(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
 	if (mc->around_capacity < mc->element_count) {
 		int *bigger = plait_alloc(a, sizeof(int) * (size_t)mc->element_count);
 		if (bigger == NULL) {
-			return false;
+			return -1;
 		}
 		plait_free(a, mc->around_elements);
 		mc->around_elements = bigger;
 		mc->around_capacity = mc->element_count;
-	}
-	if (mc->around_lists == NULL) {
-		mc->around_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->around_lists);
-		if (mc->around_lists == NULL) {
-			return false;
-		}
 	}
 	int count = 0;
 	for (int e = 0; e < mc->element_count; ++e) {
@@ -346,8 +342,21 @@ bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *
 		}
 	}
 	mc->around_count = count;
+	return count;
+}
+
+bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *mc, pair_pass *pass)
+{
+	const plait_allocator *a = &sim->allocator;
+	if (mc->around_lists == NULL) {
+		mc->around_lists = plait_alloc_zero(a, MAX_PIECES, sizeof *mc->around_lists);
+		if (mc->around_lists == NULL) {
+			return false;
+		}
+	}
+	int count = plait_mesh_contacts_collect_around(sim, mc);
 	if (count < 2 * AROUND_RUN) {
-		return false; /* too few to share */
+		return false; /* too few to share (or out of memory) */
 	}
 	int run = AROUND_RUN;
 	if ((count + run - 1) / run > MAX_PIECES) {
@@ -358,25 +367,34 @@ bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *
 	float per_element = mc->around_pairs_per_element > 8.0f ? mc->around_pairs_per_element : 8.0f;
 	int room = 64 + (int)(2.0f * per_element * (float)run);
 	for (int k = 0; k < runs; ++k) {
-		piece_list *list = &mc->around_lists[k];
-		if (list->capacity < room) {
-			contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)room);
-			if (bigger == NULL) {
-				return false;
-			}
-			plait_free(a, list->pairs);
-			list->pairs = bigger;
-			list->capacity = room;
+		if (!piece_room(a, &mc->around_lists[k], room)) {
+			return false;
 		}
 	}
-	around_job job = {sim, mc, run};
+	around_job job = {sim, mc, run, false};
 	plait_parallel_for(&sim->parallel, list_around_runs, &job, 0, runs, 1);
+	/* Runs that ran out of room, given what they needed and listed again side by side. */
+	bool any_full = false;
+	for (int k = 0; k < runs; ++k) {
+		piece_list *list = &mc->around_lists[k];
+		if (list->full) {
+			any_full = true;
+			if (!piece_room(a, list, list->needed)) {
+				return false;
+			}
+		}
+	}
+	if (any_full) {
+		job.again = true;
+		plait_parallel_for(&sim->parallel, list_around_runs, &job, 0, runs, 1);
+	}
 	int kept = *pass->out_count, total = 0;
 	for (int k = 0; k < runs; ++k) {
 		piece_list *list = &mc->around_lists[k];
 		if (list->full) {
-			/* Again here, where its list may grow. */
+			/* Again here, where its list may grow (a run that still found no room). */
 			list->count = 0;
+			list->full = false;
 			pair_pass again = {.sim = sim,
 			                   .mc = mc,
 			                   .stage = STAGE_GATHER,
