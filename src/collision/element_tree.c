@@ -71,6 +71,74 @@ bool plait_element_tree_build(plait_element_tree *tree, const plait_allocator *a
 	return true;
 }
 
+/* Node n's box from its elements' or its children's. */
+static void refit_one(plait_element_tree *tree, int n, const vec3 *lower, const vec3 *upper)
+{
+	plait_tree_node *node = &tree->nodes[n];
+	if (node->count > 0) {
+		vec3 l = lower[tree->order[node->first]], u = upper[tree->order[node->first]];
+		for (int k = node->first + 1; k < node->first + node->count; ++k) {
+			l = v3_min(l, lower[tree->order[k]]);
+			u = v3_max(u, upper[tree->order[k]]);
+		}
+		node->lower = l;
+		node->upper = u;
+	} else {
+		const plait_tree_node *a = &tree->nodes[node->first], *b = &tree->nodes[node->first + 1];
+		node->lower = v3_min(a->lower, b->lower);
+		node->upper = v3_max(a->upper, b->upper);
+	}
+}
+
+static void refit_under(plait_element_tree *tree, int n, const vec3 *lower, const vec3 *upper)
+{
+	if (tree->nodes[n].count == 0) {
+		refit_under(tree, tree->nodes[n].first, lower, upper);
+		refit_under(tree, tree->nodes[n].first + 1, lower, upper);
+	}
+	refit_one(tree, n, lower, upper);
+}
+
+void plait_element_tree_refit_subtree(plait_element_tree *tree, int root, const vec3 *lower,
+                                      const vec3 *upper)
+{
+	refit_under(tree, root, lower, upper);
+}
+
+/* Writes the cut's roots under node n, `levels` below it, in order; returns the next free slot. */
+static int cut_under(const plait_element_tree *tree, int n, int levels, int *roots, int count)
+{
+	if (levels == 0 || tree->nodes[n].count > 0) {
+		roots[count] = n;
+		return count + 1;
+	}
+	count = cut_under(tree, tree->nodes[n].first, levels - 1, roots, count);
+	return cut_under(tree, tree->nodes[n].first + 1, levels - 1, roots, count);
+}
+
+int plait_element_tree_cut(const plait_element_tree *tree, int levels, int *roots)
+{
+	return tree->node_count > 0 ? cut_under(tree, 0, levels, roots, 0) : 0;
+}
+
+static void refit_above(plait_element_tree *tree, int n, int levels, const vec3 *lower, const vec3 *upper)
+{
+	if (levels == 0 || tree->nodes[n].count > 0) {
+		return;
+	}
+	refit_above(tree, tree->nodes[n].first, levels - 1, lower, upper);
+	refit_above(tree, tree->nodes[n].first + 1, levels - 1, lower, upper);
+	refit_one(tree, n, lower, upper);
+}
+
+void plait_element_tree_refit_above(plait_element_tree *tree, int levels, const vec3 *lower,
+                                    const vec3 *upper)
+{
+	if (tree->node_count > 0) {
+		refit_above(tree, 0, levels, lower, upper);
+	}
+}
+
 void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const vec3 *upper)
 {
 	for (int n = tree->node_count - 1; n >= 0; --n) {

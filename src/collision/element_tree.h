@@ -33,6 +33,15 @@ void plait_element_tree_destroy(plait_element_tree *tree, const plait_allocator 
 
 /* Sets every node's box from the elements' boxes (indexed by element). */
 void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const vec3 *upper);
+/* The same in parts, for workers: the nodes `levels` below the root (and leaves above that),
+ * in order, into roots (room for 2^levels); each one's subtree refitted on its own (any order,
+ * side by side); then the nodes above them. A node's box depends only on its children's or its
+ * elements' (minima and maxima), so the boxes are the ones plait_element_tree_refit sets. */
+int plait_element_tree_cut(const plait_element_tree *tree, int levels, int *roots);
+void plait_element_tree_refit_subtree(plait_element_tree *tree, int root, const vec3 *lower,
+                                      const vec3 *upper);
+void plait_element_tree_refit_above(plait_element_tree *tree, int levels, const vec3 *lower,
+                                    const vec3 *upper);
 
 /* Calls visit(a, b, context) once for every pair of distinct elements whose boxes overlap;
  * a < b is not promised. Uses the boxes given to the last refit. */

@@ -608,34 +608,50 @@ static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*tri
 	return cone_round(v3_scale(sum, 1.0f / length), t, count);
 }
 
-void plait_flat_patches_fit_leaves(plait_flat_patches *fp, const plait_element_tree *tree,
-                                   const plait_patch_paths *paths, int first, int last)
+static void fit_under(plait_flat_patches *fp, const plait_element_tree *tree, const plait_patch_paths *paths,
+                      int n)
 {
-	for (int n = first; n < last && n < fp->node_count; ++n) {
-		const plait_tree_node *node = &tree->nodes[n];
-		if (node->count > 0) {
-			fp->patch_cone[n] =
-			    triangles_cone(paths, (const int(*)[3])fp->triangles, tree->order + node->first, node->count);
-		}
+	const plait_tree_node *node = &tree->nodes[n];
+	if (node->count > 0) {
+		fp->patch_cone[n] =
+		    triangles_cone(paths, (const int(*)[3])fp->triangles, tree->order + node->first, node->count);
+		return;
+	}
+	fit_under(fp, tree, paths, node->first);
+	fit_under(fp, tree, paths, node->first + 1);
+	fp->patch_cone[n] = plait_cone_merge(fp->patch_cone[node->first], fp->patch_cone[node->first + 1]);
+}
+
+void plait_flat_patches_fit_subtree(plait_flat_patches *fp, const plait_element_tree *tree,
+                                    const plait_patch_paths *paths, int root)
+{
+	if (fp->node_count > 0) {
+		fit_under(fp, tree, paths, root);
 	}
 }
 
-void plait_flat_patches_fit_parents(plait_flat_patches *fp, const plait_element_tree *tree)
+static void fit_above(plait_flat_patches *fp, const plait_element_tree *tree, int n, int levels)
 {
-	for (int n = fp->node_count - 1; n >= 0; --n) {
-		const plait_tree_node *node = &tree->nodes[n];
-		if (node->count == 0) {
-			fp->patch_cone[n] =
-			    plait_cone_merge(fp->patch_cone[node->first], fp->patch_cone[node->first + 1]);
-		}
+	const plait_tree_node *node = &tree->nodes[n];
+	if (levels == 0 || node->count > 0) {
+		return;
+	}
+	fit_above(fp, tree, node->first, levels - 1);
+	fit_above(fp, tree, node->first + 1, levels - 1);
+	fp->patch_cone[n] = plait_cone_merge(fp->patch_cone[node->first], fp->patch_cone[node->first + 1]);
+}
+
+void plait_flat_patches_fit_above(plait_flat_patches *fp, const plait_element_tree *tree, int levels)
+{
+	if (fp->node_count > 0) {
+		fit_above(fp, tree, 0, levels);
 	}
 }
 
 void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tree,
                             const plait_patch_paths *paths)
 {
-	plait_flat_patches_fit_leaves(fp, tree, paths, 0, fp->node_count);
-	plait_flat_patches_fit_parents(fp, tree);
+	plait_flat_patches_fit_subtree(fp, tree, paths, 0);
 }
 
 /* ---- The contour ------------------------------------------------------------------------------ */

@@ -81,14 +81,15 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
                               const vec3 *rest);
 void plait_flat_patches_destroy(plait_flat_patches *fp, const plait_allocator *allocator);
 
-/* Refits every node's normal cone over the paths: the leaves' from their triangles, then the
- * parents' by merging. The same in two steps, for workers: the leaves among nodes [first, last)
- * (ranges side by side), then the parents (one caller). */
+/* Refits every node's normal cone over the paths: the leaves' from their triangles, the
+ * parents' by merging their children's. The same in parts, for workers: each subtree under the
+ * roots of a cut (plait_element_tree_cut; side by side), then the nodes above them (one caller).
+ * A node's cone depends only on its children's or its triangles, so the cones are the same. */
 void plait_flat_patches_fit(plait_flat_patches *fp, const plait_element_tree *tree,
                             const plait_patch_paths *paths);
-void plait_flat_patches_fit_leaves(plait_flat_patches *fp, const plait_element_tree *tree,
-                                   const plait_patch_paths *paths, int first, int last);
-void plait_flat_patches_fit_parents(plait_flat_patches *fp, const plait_element_tree *tree);
+void plait_flat_patches_fit_subtree(plait_flat_patches *fp, const plait_element_tree *tree,
+                                    const plait_patch_paths *paths, int root);
+void plait_flat_patches_fit_above(plait_flat_patches *fp, const plait_element_tree *tree, int levels);
 
 /* Whether node `node`'s patch cannot touch itself anywhere on the paths (the last fit's cones,
  * and its contour checked here); *axis (unless NULL): the direction it faces. Reads only: safe

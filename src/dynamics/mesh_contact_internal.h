@@ -142,6 +142,7 @@ typedef struct piece_list {
 	contact_pair *pairs;
 	int count, capacity;
 	int needed; /* pairs it would have listed, had it room */
+	int offset; /* where its pairs go in the joined list */
 	bool full;
 	int features_kept, features_left_out;
 } piece_list;

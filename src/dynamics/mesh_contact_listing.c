@@ -103,6 +103,24 @@ static void fit_box_range(void *context, int begin, int end)
 	}
 }
 
+/* Trees are refitted on the workers subtree by subtree, CUT_LEVELS below their roots, then
+ * above those on the calling thread. */
+#define CUT_LEVELS 5
+
+typedef struct refit_job {
+	plait_element_tree *tree;
+	const vec3 *lower, *upper;
+	const int *roots;
+} refit_job;
+
+static void refit_subtrees(void *context, int begin, int end)
+{
+	const refit_job *job = context;
+	for (int k = begin; k < end; ++k) {
+		plait_element_tree_refit_subtree(job->tree, job->roots[k], job->lower, job->upper);
+	}
+}
+
 /* As plait_mesh_contacts_fit_boxes; without measure_edges the cloth edges' bounds of the last
  * listing are kept (a re-listing around strayed vertices must decide as the listing did). */
 static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin, bool measure_edges)
@@ -114,7 +132,11 @@ static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float
 	}
 	for (int k = 0; k < mc->object_count; ++k) {
 		collision_object *o = &mc->objects[k];
-		plait_element_tree_refit(&o->tree, mc->lower + o->first, mc->upper + o->first);
+		int roots[1 << CUT_LEVELS];
+		refit_job refit = {&o->tree, mc->lower + o->first, mc->upper + o->first, roots};
+		int count = plait_element_tree_cut(&o->tree, CUT_LEVELS, roots);
+		plait_parallel_for(&sim->parallel, refit_subtrees, &refit, 0, count, 1);
+		plait_element_tree_refit_above(&o->tree, CUT_LEVELS, refit.lower, refit.upper);
 	}
 }
 
@@ -127,19 +149,21 @@ bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pa
 	return mc->cull_flat && mc->patches_fitted_for == (int)pass->stage && !pass->around_only;
 }
 
+/* Normal cones are fitted the same way as boxes (CUT_LEVELS). */
 typedef struct fit_job {
 	plait_mesh_contacts *mc;
 	collision_object *object;
+	const int *roots;
 } fit_job;
 
-static void fit_leaves(void *context, int begin, int end)
+static void fit_subtrees(void *context, int begin, int end)
 {
 	fit_job *job = context;
-	plait_flat_patches_fit_leaves(&job->object->patches, &job->object->tree, &job->mc->patch_paths, begin,
-	                              end);
+	for (int k = begin; k < end; ++k) {
+		plait_flat_patches_fit_subtree(&job->object->patches, &job->object->tree, &job->mc->patch_paths,
+		                               job->roots[k]);
+	}
 }
-
-#define FIT_GRAIN 1024
 
 void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths,
                                      stage of)
@@ -151,9 +175,11 @@ void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, co
 		if (o->patches.node_count == 0) {
 			continue;
 		}
-		fit_job job = {mc, o};
-		plait_parallel_for(&sim->parallel, fit_leaves, &job, 0, o->patches.node_count, FIT_GRAIN);
-		plait_flat_patches_fit_parents(&o->patches, &o->tree);
+		int roots[1 << CUT_LEVELS];
+		int count = plait_element_tree_cut(&o->tree, CUT_LEVELS, roots);
+		fit_job job = {mc, o, roots};
+		plait_parallel_for(&sim->parallel, fit_subtrees, &job, 0, count, 1);
+		plait_flat_patches_fit_above(&o->patches, &o->tree, CUT_LEVELS);
 	}
 }
 

@@ -117,6 +117,25 @@ static void list_pieces(void *context, int begin, int end)
 	}
 }
 
+/* Lists [begin, end) copied to their offsets in the joined list. */
+typedef struct join_job {
+	const piece_list *lists;
+	contact_pair *into;
+} join_job;
+
+#define JOIN_GRAIN 4
+
+static void join_lists(void *context, int begin, int end)
+{
+	const join_job *job = context;
+	for (int k = begin; k < end; ++k) {
+		const piece_list *list = &job->lists[k];
+		if (list->count > 0) {
+			memcpy(job->into + list->offset, list->pairs, sizeof *list->pairs * (size_t)list->count);
+		}
+	}
+}
+
 /* Room for `room` pairs in a piece's list (its pairs need not be kept); false when out of
  * memory. Grown by half again, so that lists whose length wavers are not made anew each time. */
 static bool piece_room(const plait_allocator *a, piece_list *list, int room)
@@ -256,12 +275,11 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 	}
 	mc->pair_count = 0;
 	for (int k = 0; k < mc->piece_count; ++k) {
-		const piece_list *list = &mc->piece_lists[k];
-		if (list->count > 0) {
-			memcpy(mc->pairs + mc->pair_count, list->pairs, sizeof *list->pairs * (size_t)list->count);
-			mc->pair_count += list->count;
-		}
+		mc->piece_lists[k].offset = mc->pair_count;
+		mc->pair_count += mc->piece_lists[k].count;
 	}
+	join_job join = {mc->piece_lists, mc->pairs};
+	plait_parallel_for(&sim->parallel, join_lists, &join, 0, mc->piece_count, JOIN_GRAIN);
 	return true;
 }
 
@@ -417,12 +435,10 @@ bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *
 		return true;
 	}
 	for (int k = 0; k < runs; ++k) {
-		const piece_list *list = &mc->around_lists[k];
-		if (list->count > 0) {
-			memcpy(*pass->out_pairs + *pass->out_count, list->pairs,
-			       sizeof *list->pairs * (size_t)list->count);
-			*pass->out_count += list->count;
-		}
+		mc->around_lists[k].offset = *pass->out_count - kept;
+		*pass->out_count += mc->around_lists[k].count;
 	}
+	join_job join = {mc->around_lists, *pass->out_pairs + kept};
+	plait_parallel_for(&sim->parallel, join_lists, &join, 0, runs, JOIN_GRAIN);
 	return true;
 }
