@@ -368,3 +368,62 @@ Test(flat_patches, a_flat_l_is_flat_round_the_centre_chosen_at_rest)
 	cr_expect(root_flat(&m, m.x, m.x, 1e-4f));
 	mesh_free(&m);
 }
+
+/* Workers fit the cones and refit the boxes subtree by subtree under a cut of the tree, then the
+ * nodes above it: the same cones and boxes, to the bit, as fitting the whole tree at once, at any
+ * depth of cut (the solver's bits must not depend on the number of workers). */
+Test(flat_patches, fitting_by_subtrees_gives_the_whole_trees_cones_and_boxes)
+{
+	patch_mesh m = grid(33, 29);
+	vec3 *motion = malloc(sizeof *motion * (size_t)m.vertex_count);
+	for (int i = 0; i < m.vertex_count; ++i) {
+		vec3 x = m.x[i];
+		m.x[i].y = 0.05f * sinf(9.0f * x.x) * cosf(7.0f * x.z);
+		motion[i] = v3(0.002f * sinf(31.0f * x.z), 0.003f * cosf(17.0f * x.x), 0.001f);
+	}
+	plait_patch_paths paths = {m.x, motion, NULL, 1.0f, 1.0f};
+	int nodes = m.tree.node_count;
+	vec3 *lower = malloc(sizeof *lower * (size_t)m.triangle_count);
+	vec3 *upper = malloc(sizeof *upper * (size_t)m.triangle_count);
+	for (int t = 0; t < m.triangle_count; ++t) {
+		const int *v = m.triangles[t];
+		lower[t] = v3_min(m.x[v[0]], v3_min(m.x[v[1]], m.x[v[2]]));
+		upper[t] = v3_max(m.x[v[0]], v3_max(m.x[v[1]], m.x[v[2]]));
+	}
+	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
+	plait_element_tree_refit(&m.tree, lower, upper);
+	plait_cone *cones = malloc(sizeof *cones * (size_t)nodes);
+	plait_tree_node *whole = malloc(sizeof *whole * (size_t)nodes);
+	memcpy(cones, m.patches.patch_cone, sizeof *cones * (size_t)nodes);
+	memcpy(whole, m.tree.nodes, sizeof *whole * (size_t)nodes);
+	int flat = 0;
+	for (int n = 0; n < nodes; ++n) {
+		flat += cones[n].angle < 1.0f;
+	}
+	cr_assert_gt(flat, 10, "the crumpled grid has only %d nodes with narrow cones", flat);
+	for (int levels = 0; levels <= 6; ++levels) {
+		memset(m.patches.patch_cone, 0, sizeof *cones * (size_t)nodes);
+		for (int n = 0; n < nodes; ++n) {
+			m.tree.nodes[n].lower = m.tree.nodes[n].upper = v3(0.0f, 0.0f, 0.0f);
+		}
+		int roots[64];
+		int count = plait_element_tree_cut(&m.tree, levels, roots);
+		cr_assert(count >= 1 && count <= 1 << levels);
+		for (int k = count - 1; k >= 0; --k) { /* any order */
+			plait_flat_patches_fit_subtree(&m.patches, &m.tree, &paths, roots[k]);
+			plait_element_tree_refit_subtree(&m.tree, roots[k], lower, upper);
+		}
+		plait_flat_patches_fit_above(&m.patches, &m.tree, levels);
+		plait_element_tree_refit_above(&m.tree, levels, lower, upper);
+		cr_expect(memcmp(cones, m.patches.patch_cone, sizeof *cones * (size_t)nodes) == 0,
+		          "cones differ with a cut %d levels down", levels);
+		cr_expect(memcmp(whole, m.tree.nodes, sizeof *whole * (size_t)nodes) == 0,
+		          "boxes differ with a cut %d levels down", levels);
+	}
+	free(cones);
+	free(whole);
+	free(lower);
+	free(upper);
+	free(motion);
+	mesh_free(&m);
+}
