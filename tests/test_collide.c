@@ -512,12 +512,12 @@ Test(collide, a_sphere_mesh_keeps_its_corners_and_edges_against_a_sheets_large_t
 Test(collide, a_sphere_mesh_leaves_its_smooth_corners_and_edges_to_a_sheets_vertices)
 {
 	sphere_mesh_run rigid = drop_sheet_on_sphere_mesh(24, 0.6f, 0.01f, false);
-	cr_assert_gt(rigid.left_out, 0);
 	sphere_mesh_run deforming = drop_sheet_on_sphere_mesh(24, 0.6f, 0.01f, true);
 	cr_assert_gt(deforming.kept, 0);
 	cr_assert_eq(deforming.left_out, 0);
 	/* (Counted in the element pairs a listing walks: node pairs where nothing can be kept are
-	 * passed over whole, their corners and edges uncounted.) */
+	 * passed over whole, their corners and edges uncounted, so the rigid sphere's may all go
+	 * unmet.) */
 	cr_assert_lt(rigid.kept, deforming.kept / 4, "%d corners and edges kept, %d for the deforming sphere",
 	             rigid.kept, deforming.kept);
 }
@@ -574,7 +574,8 @@ Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
 
 /* Listings pass over node pairs of a filtered collider and a cloth where the cloth's largest D
  * falls short of the collider's least reach (no element pair there could keep a corner or edge,
- * mesh_contact_features.c): the list is the same, pair for pair and in order, as walking them. */
+ * mesh_contact_features.c): the list is the same, pair for pair and in order, as walking them.
+ * Quads of 3.75 cm, long enough for the sphere to keep some of its corners and edges. */
 Test(collide, passing_over_smooth_node_pairs_lists_the_same_pairs)
 {
 	plait_world_def wdef = plait_default_world_def();
@@ -586,7 +587,7 @@ Test(collide, passing_over_smooth_node_pairs_lists_the_same_pairs)
 	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
 	sphere.surface.thickness = 0.0f;
 	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
-	test_grid grid = test_grid_make(20, 20, 0.6f, 0.6f);
+	test_grid grid = test_grid_make(16, 16, 0.6f, 0.6f);
 	for (int i = 0; i < grid.vertex_count; ++i) {
 		grid.positions[i].y = 0.7f;
 	}
@@ -606,9 +607,10 @@ Test(collide, passing_over_smooth_node_pairs_lists_the_same_pairs)
 	memcpy(walked, mc->pairs, sizeof *walked * (size_t)count);
 	mc->skip_smooth = true;
 	plait_mesh_contacts_gather(sim, mc);
-	cr_expect_lt(mc->features_kept + mc->features_left_out, met / 2,
+	cr_expect_lt(mc->features_kept + mc->features_left_out, met,
 	             "%d corners and edges met with node pairs passed over, %d without",
 	             mc->features_kept + mc->features_left_out, met);
+	cr_expect_gt(mc->features_kept, 0, "no corner or edge kept: nothing left to compare");
 	cr_assert_gt(count, 0);
 	cr_assert_eq(mc->pair_count, count);
 	for (int k = 0; k < count; ++k) {

@@ -290,7 +290,7 @@ static inline bool plait_mesh_contacts_few_strays(int strays, int count)
 #define REJECT_SLACK 1e-5f
 
 /* A listing's bound on a cloth edge near a filtered collider: this many times its length now. */
-#define CLOTH_EDGE_SLACK 1.3f
+#define CLOTH_EDGE_SLACK 1.1f
 
 typedef enum stage {
 	STAGE_REST, /* finding the rest pairs, from the start positions */
