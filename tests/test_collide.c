@@ -572,6 +572,72 @@ Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
 	plait_destroy_world(world);
 }
 
+/* A 16 x 16 quad sheet 0.6 m wide dropped onto a sphere mesh for `frames` frames, the
+ * collider pass's clearances (sim.h) used or not; the sheet's positions into x (289 vertices).
+ * Returns how many of its vertices ended with a known clearance beyond their radius. */
+static int sheet_on_sphere_mesh_positions(bool clearances, int frames, plait_vec3 *x)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	sphere_mesh ball = make_sphere_mesh(48);
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_MESH;
+	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
+	sphere.surface.thickness = 0.0f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
+	test_grid grid = test_grid_make(16, 16, 0.6f, 0.6f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].y = 0.7f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.01f;
+	plait_object_id cloth = plait_create_cloth(world, &def, NULL);
+	cr_assert(!plait_object_id_is_null(cloth));
+	test_grid_free(&grid);
+	plait_sim *sim = &world.world->sim;
+	plait_collider *c = &sim->colliders[0];
+	for (int frame = 0; frame < frames; ++frame) {
+		if (!clearances) {
+			/* Room enough, and none: the collider pass tests every particle. */
+			plait_free(&sim->allocator, c->clear_at);
+			plait_free(&sim->allocator, c->clearance);
+			c->clear_at = NULL;
+			c->clearance = NULL;
+			c->clear_capacity = 1 << 30;
+		}
+		cr_assert(test_step_frames(world, 1));
+	}
+	int count = plait_object_get_vertex_count(cloth);
+	cr_assert_eq(count, 17 * 17);
+	cr_assert_eq(plait_object_get_positions(cloth, 0, count, x, NULL), PLAIT_OK);
+	int clear = 0;
+	for (int i = 0; c->clearance != NULL && i < sim->particles.count && i < c->clear_capacity; ++i) {
+		clear += c->clearance[i] > sim->particles.radius[i] && isfinite(c->clearance[i]);
+	}
+	if (!clearances) {
+		c->clear_capacity = 0;
+	}
+	plait_destroy_world(world);
+	free(ball.x);
+	free(ball.sizes);
+	free(ball.indices);
+	return clear;
+}
+
+/* The collider pass passes over a particle whose path keeps within its last measured clearance
+ * (less the radius) of where it was measured: a sheet falling onto and draping over a sphere
+ * mesh ends in the same bits with that as with every particle tested. */
+Test(collide, passing_over_particles_clear_of_a_mesh_collider_changes_nothing)
+{
+	plait_vec3 with[17 * 17], without[17 * 17];
+	int clear = sheet_on_sphere_mesh_positions(true, 40, with);
+	sheet_on_sphere_mesh_positions(false, 40, without);
+	cr_expect_gt(clear, 20, "only %d vertices were known clear of the sphere", clear);
+	cr_expect(memcmp(with, without, sizeof with) == 0, "the sheet ends elsewhere with clearances");
+}
+
 /* Listings pass over node pairs of a filtered collider and a cloth where the cloth's largest D
  * falls short of the collider's least reach (no element pair there could keep a corner or edge,
  * mesh_contact_features.c): the list is the same, pair for pair and in order, as walking them.

@@ -20,10 +20,48 @@ static plait_transform lerp_transform(plait_transform a, plait_transform b, floa
 	return r;
 }
 
+/* Room for a closed rigid mesh collider's clearances (sim.h), unknown for new particles; on
+ * failure the collider goes without. */
+static void reserve_clearances(plait_sim *sim, plait_collider *c)
+{
+	int count = sim->particles.count;
+	bool wanted = c->shape.type == PLAIT_SHAPE_MESH && c->mesh_end == NULL && c->shape.mesh->closed;
+	if (!wanted || c->clear_capacity >= count) {
+		return;
+	}
+	const plait_allocator *a = &sim->allocator;
+	int capacity = count + count / 2;
+	vec3 *at = plait_alloc(a, sizeof *at * (size_t)capacity);
+	float *clearance = plait_alloc(a, sizeof *clearance * (size_t)capacity);
+	if (at != NULL && clearance != NULL && c->clear_capacity > 0) {
+		memcpy(at, c->clear_at, sizeof *at * (size_t)c->clear_capacity);
+		memcpy(clearance, c->clearance, sizeof *clearance * (size_t)c->clear_capacity);
+	}
+	int known = at != NULL && clearance != NULL ? c->clear_capacity : 0;
+	plait_free(a, c->clear_at);
+	plait_free(a, c->clearance);
+	c->clear_at = NULL;
+	c->clearance = NULL;
+	c->clear_capacity = 0;
+	if (at == NULL || clearance == NULL) {
+		plait_free(a, at);
+		plait_free(a, clearance);
+		return;
+	}
+	for (int i = known; i < capacity; ++i) {
+		clearance[i] = -INFINITY;
+		at[i] = v3(0.0f, 0.0f, 0.0f);
+	}
+	c->clear_at = at;
+	c->clearance = clearance;
+	c->clear_capacity = capacity;
+}
+
 void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
 {
 	for (int k = 0; k < sim->collider_count; ++k) {
 		plait_collider *c = &sim->colliders[k];
+		reserve_clearances(sim, c);
 		c->rigid_start = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t0));
 		c->rigid_end = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t1));
 		if (c->mesh_end != NULL) {
@@ -317,7 +355,8 @@ static bool any_triangle_near(const plait_mesh_shape *mesh, vec3 lower, vec3 upp
 }
 
 static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 *p1, float radius,
-                                    float friction, bool thorough, vec3 *contact_normal, vec3 *surface_motion)
+                                    float friction, bool thorough, vec3 *contact_normal, vec3 *surface_motion,
+                                    vec3 *measured_at, float *measured)
 {
 	vec3 grow = {radius, radius, radius};
 	vec3 lower = v3_sub(v3_min(p0, *p1), grow), upper = v3_add(v3_max(p0, *p1), grow);
@@ -370,6 +409,8 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 		 * outside near edges and corners too. */
 		vec3 normal;
 		float outside = mesh->outward * plait_mesh_shape_distance(mesh, pass.p1, &normal);
+		*measured_at = pass.p1;
+		*measured = outside;
 		if (outside < radius) {
 			push_out(&pass, v3_scale(normal, mesh->outward), radius - outside, v3(0.0f, 0.0f, 0.0f));
 		}
@@ -581,10 +622,27 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 	}
 	float inverse_h = 1.0f / sim->substep_time;
 	if (c->shape.type == PLAIT_SHAPE_MESH) {
-		vec3 normal, motion;
+		bool cleared = c->clearance != NULL && i < c->clear_capacity;
+		if (cleared) {
+			/* Clear of the collider by more than the radius all along the path: nothing to do
+			 * (the same as the tests below would find; the slack covers their rounding). */
+			vec3 at = c->clear_at[i];
+			float moved = plait_maxf(v3_length(v3_sub(p0, at)), v3_length(v3_sub(p1, at)));
+			float scale = fabsf(at.x) + fabsf(at.y) + fabsf(at.z) + moved;
+			if (c->clearance[i] - moved > radius * 1.001f + 1e-6f * scale) {
+				return 0;
+			}
+		}
+		vec3 normal, motion, measured_at;
+		float measured = -INFINITY;
 		float friction = plait_combined_friction(mat->friction, c->friction);
-		if (!collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, sim->substep == 0, &normal,
-		                             &motion)) {
+		bool touched = collide_point_with_mesh(c->shape.mesh, p0, &p1, radius, friction, sim->substep == 0,
+		                                       &normal, &motion, &measured_at, &measured);
+		if (cleared && measured > -INFINITY) {
+			c->clear_at[i] = measured_at;
+			c->clearance[i] = measured;
+		}
+		if (!touched) {
 			return 0;
 		}
 		/* Where the touched surface point was at the substep's start, to where it is. */

@@ -206,6 +206,14 @@ typedef struct plait_collider {
 	 * cloth's triangles cannot pass between their vertices. They follow the collider substep by
 	 * substep (plait_colliders_begin_substep). */
 	int first, count;
+	/* A closed rigid mesh collider's clearances (NULL for every other, or when out of memory):
+	 * per particle, a point in shape space and how far outside the collider it is (its signed
+	 * distance there; -INFINITY: unknown). That distance changes by no more than the distance
+	 * moved, so a particle whose path keeps within clearance - radius of that point cannot touch
+	 * the collider and is passed over (contact.c). */
+	vec3 *clear_at;
+	float *clearance;
+	int clear_capacity;
 } plait_collider;
 
 /* A cloth's surface as other objects' vertices see it: its triangles (object-local indices)

@@ -17,6 +17,11 @@ void plait_collider_release(plait_world *world, plait_collider *collider)
 	plait_free(&world->allocator, collider->mesh_end);
 	collider->mesh_start = NULL;
 	collider->mesh_end = NULL;
+	plait_free(&world->allocator, collider->clear_at);
+	plait_free(&world->allocator, collider->clearance);
+	collider->clear_at = NULL;
+	collider->clearance = NULL;
+	collider->clear_capacity = 0;
 }
 
 void plait_destroy_object(plait_object_id id)
