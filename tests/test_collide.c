@@ -575,7 +575,7 @@ Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
 /* A 16 x 16 quad sheet 0.6 m wide dropped onto a sphere mesh for `frames` frames, the
  * collider pass's clearances (sim.h) used or not; the sheet's positions into x (289 vertices).
  * Returns how many of its vertices ended with a known clearance beyond their radius. */
-static int sheet_on_sphere_mesh_positions(bool clearances, int frames, plait_vec3 *x)
+static int sheet_on_sphere_mesh_positions(bool clearances, bool slab, int frames, plait_vec3 *x)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.air_density = 0.0f;
@@ -584,6 +584,15 @@ static int sheet_on_sphere_mesh_positions(bool clearances, int frames, plait_vec
 	plait_collider_def sphere = plait_default_collider_def();
 	sphere.shape = PLAIT_SHAPE_MESH;
 	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
+	/* Or a slab 20 m wide with its top where the sphere's is: two triangles of 20 m meet under
+	 * the sheet, and the sweep's rounding allowance grows with them. */
+	plait_vec3 slab_x[8] = {{-10, 0.3f, -10}, {10, 0.3f, -10}, {10, 0.3f, 10}, {-10, 0.3f, 10},
+	                        {-10, 0.5f, -10}, {10, 0.5f, -10}, {10, 0.5f, 10}, {-10, 0.5f, 10}};
+	int slab_sizes[6] = {4, 4, 4, 4, 4, 4};
+	int slab_indices[24] = {4, 7, 6, 5, 0, 1, 2, 3, 0, 4, 5, 1, 3, 2, 6, 7, 0, 3, 7, 4, 1, 5, 6, 2};
+	if (slab) {
+		sphere.mesh = (plait_mesh_def){slab_x, 8, slab_sizes, 6, slab_indices};
+	}
 	sphere.surface.thickness = 0.0f;
 	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
 	test_grid grid = test_grid_make(16, 16, 0.6f, 0.6f);
@@ -628,14 +637,19 @@ static int sheet_on_sphere_mesh_positions(bool clearances, int frames, plait_vec
 
 /* The collider pass passes over a particle whose path keeps within its last measured clearance
  * (less the radius) of where it was measured: a sheet falling onto and draping over a sphere
- * mesh ends in the same bits with that as with every particle tested. */
+ * mesh, or landing on a slab of two 20 m triangles a face, ends in the same bits with that as
+ * with every particle tested. */
 Test(collide, passing_over_particles_clear_of_a_mesh_collider_changes_nothing)
 {
-	plait_vec3 with[17 * 17], without[17 * 17];
-	int clear = sheet_on_sphere_mesh_positions(true, 40, with);
-	sheet_on_sphere_mesh_positions(false, 40, without);
-	cr_expect_gt(clear, 20, "only %d vertices were known clear of the sphere", clear);
-	cr_expect(memcmp(with, without, sizeof with) == 0, "the sheet ends elsewhere with clearances");
+	for (int slab = 0; slab < 2; ++slab) {
+		plait_vec3 with[17 * 17], without[17 * 17];
+		int clear = sheet_on_sphere_mesh_positions(true, slab, 40, with);
+		sheet_on_sphere_mesh_positions(false, slab, 40, without);
+		const char *what = slab ? "slab" : "sphere";
+		cr_expect_gt(clear, slab ? 5 : 20, "only %d vertices were known clear of the %s", clear, what);
+		cr_expect(memcmp(with, without, sizeof with) == 0, "the sheet ends elsewhere with clearances (%s)",
+		          what);
+	}
 }
 
 /* Listings pass over node pairs of a filtered collider and a cloth where the cloth's largest D

@@ -571,7 +571,11 @@ static plait_cone cone_round(vec3 axis, const triangle_normals *t, int count)
 			if (!(along > 0.0f)) {
 				return no_cone(); /* at or past a right angle (or the triangle collapses) */
 			}
-			widest_sq = fmaxf(widest_sq, v3_length_sq(v3_cross(t[k].n[m], axis)) / (along * along));
+			float ratio = v3_length_sq(v3_cross(t[k].n[m], axis)) / (along * along);
+			if (!(ratio < INFINITY)) {
+				return no_cone(); /* overflowed (absurd coordinates): bounds nothing */
+			}
+			widest_sq = fmaxf(widest_sq, ratio);
 		}
 	}
 	float widest = sqrtf(widest_sq);

@@ -622,14 +622,20 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 	}
 	float inverse_h = 1.0f / sim->substep_time;
 	if (c->shape.type == PLAIT_SHAPE_MESH) {
-		bool cleared = c->clearance != NULL && i < c->clear_capacity;
+		bool cleared = c->clearance != NULL && i < c->clear_capacity && c->shape.mesh->node_count > 0;
 		if (cleared) {
-			/* Clear of the collider by more than the radius all along the path: nothing to do
-			 * (the same as the tests below would find; the slack covers their rounding). */
+			/* Clear of the collider by more than the radius all along the path: nothing to do,
+			 * as the tests below would find. The slack is twice what the sweep widens its
+			 * reach by for rounding (collision/static_sweep.c: 1e-5 of the radius, the motion,
+			 * and the distances from p0 to a corner and between corners), bounded through the
+			 * mesh's box, whose coordinates' sizes `extent` bounds. */
+			const plait_bvh_node *root = &c->shape.mesh->nodes[0];
 			vec3 at = c->clear_at[i];
 			float moved = plait_maxf(v3_length(v3_sub(p0, at)), v3_length(v3_sub(p1, at)));
-			float scale = fabsf(at.x) + fabsf(at.y) + fabsf(at.z) + moved;
-			if (c->clearance[i] - moved > radius * 1.001f + 1e-6f * scale) {
+			float extent = fabsf(root->lower.x) + fabsf(root->lower.y) + fabsf(root->lower.z) +
+			               fabsf(root->upper.x) + fabsf(root->upper.y) + fabsf(root->upper.z);
+			float scale = radius + 4.0f * moved + fabsf(at.x) + fabsf(at.y) + fabsf(at.z) + 3.0f * extent;
+			if (c->clearance[i] - moved > radius * 1.001f + 2e-5f * scale) {
 				return 0;
 			}
 		}
