@@ -142,20 +142,7 @@ void plait_element_tree_refit_above(plait_element_tree *tree, int levels, const 
 void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const vec3 *upper)
 {
 	for (int n = tree->node_count - 1; n >= 0; --n) {
-		plait_tree_node *node = &tree->nodes[n];
-		if (node->count > 0) {
-			vec3 l = lower[tree->order[node->first]], u = upper[tree->order[node->first]];
-			for (int k = node->first + 1; k < node->first + node->count; ++k) {
-				l = v3_min(l, lower[tree->order[k]]);
-				u = v3_max(u, upper[tree->order[k]]);
-			}
-			node->lower = l;
-			node->upper = u;
-		} else {
-			const plait_tree_node *a = &tree->nodes[node->first], *b = &tree->nodes[node->first + 1];
-			node->lower = v3_min(a->lower, b->lower);
-			node->upper = v3_max(a->upper, b->upper);
-		}
+		refit_one(tree, n, lower, upper); /* children come after their parent */
 	}
 }
 

@@ -64,12 +64,6 @@ bool plait_mesh_contacts_reserve_pieces(plait_mesh_contacts *mc, const plait_all
 	return true;
 }
 
-typedef struct piece_job {
-	plait_sim *sim;
-	plait_mesh_contacts *mc;
-	bool again;
-} piece_job;
-
 void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, const gather_piece *piece)
 {
 	const collision_object *oa = &mc->objects[piece->a], *ob = &mc->objects[piece->b];
@@ -88,33 +82,6 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	    self ? (plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL)
 	         : plait_mesh_contacts_smooth_skip(mc, piece->a, piece->b, &floors, &smooth),
 	    piece->node, plait_mesh_contacts_visit_object_elements, &o);
-}
-
-/* Lists pieces [begin, end) into their lists (only those that filled theirs up before, when
- * job->again). */
-static void list_pieces(void *context, int begin, int end)
-{
-	piece_job *job = context;
-	plait_mesh_contacts *mc = job->mc;
-	for (int k = begin; k < end; ++k) {
-		piece_list *list = &mc->piece_lists[k];
-		if (job->again && !list->full) {
-			continue;
-		}
-		list->count = 0;
-		pair_pass pass = {.sim = job->sim,
-		                  .mc = mc,
-		                  .stage = STAGE_GATHER,
-		                  .out_pairs = &list->pairs,
-		                  .out_count = &list->count,
-		                  .out_capacity = &list->capacity,
-		                  .fixed_capacity = true};
-		plait_mesh_contacts_list_piece(mc, &pass, &mc->pieces[k]);
-		list->full = pass.full;
-		list->needed = list->count + pass.overflow;
-		list->features_kept = pass.features_kept;
-		list->features_left_out = pass.features_left_out;
-	}
 }
 
 /* Lists [begin, end) copied to their offsets in the joined list. */
@@ -152,6 +119,129 @@ static bool piece_room(const plait_allocator *a, piece_list *list, int room)
 	list->pairs = bigger;
 	list->capacity = capacity;
 	return true;
+}
+
+/* Listing in parts on the workers: the gather's pieces and the re-listing's runs. Part k lists
+ * into lists[k] through list_part; the parts are joined in order, which is the order one thread
+ * lists them in. */
+typedef struct parts_job parts_job;
+typedef void list_part_fn(const parts_job *job, pair_pass *pass, int k);
+struct parts_job {
+	plait_sim *sim;
+	plait_mesh_contacts *mc;
+	piece_list *lists;
+	list_part_fn *list_part;
+	bool around_only; /* the re-listing's (pair_pass.around_only) */
+	int run;          /* the re-listing's flagged elements a run */
+	bool again;       /* only the parts that ran out of room */
+};
+
+static void list_part_range(void *context, int begin, int end)
+{
+	const parts_job *job = context;
+	for (int k = begin; k < end; ++k) {
+		piece_list *list = &job->lists[k];
+		if (job->again && !list->full) {
+			continue;
+		}
+		list->count = 0;
+		pair_pass pass = {.sim = job->sim,
+		                  .mc = job->mc,
+		                  .stage = STAGE_GATHER,
+		                  .around_only = job->around_only,
+		                  .out_pairs = &list->pairs,
+		                  .out_count = &list->count,
+		                  .out_capacity = &list->capacity,
+		                  .fixed_capacity = true};
+		job->list_part(job, &pass, k);
+		list->full = pass.full;
+		list->needed = list->count + pass.overflow;
+		list->features_kept = pass.features_kept;
+		list->features_left_out = pass.features_left_out;
+	}
+}
+
+/* Room for `count` more pairs after the first `keep` of *pairs (which are kept). */
+static bool grow_pairs(const plait_allocator *a, contact_pair **pairs, int *capacity, int keep, int count)
+{
+	if (keep + count <= *capacity) {
+		return true;
+	}
+	int room = keep + count + (keep + count) / 2;
+	contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)room);
+	if (bigger == NULL) {
+		return false;
+	}
+	if (keep > 0) {
+		memcpy(bigger, *pairs, sizeof *bigger * (size_t)keep);
+	}
+	plait_free(a, *pairs);
+	*pairs = bigger;
+	*capacity = room;
+	return true;
+}
+
+/* Lists parts [0, count), whose lists have their room, side by side. A part that runs out of
+ * room counts what it could not list, gets that room and is listed again side by side (the
+ * same pairs: a part's list depends on nothing but the part), or, failing that, on the calling
+ * thread where its list may grow. The lists are then joined after out's pairs, and their
+ * corner and edge counts added to out's. False (nothing listed) when out of memory for a list;
+ * out of memory for the joined list sets mc->out_of_memory. */
+static bool list_parts(parts_job *job, int count, pair_pass *out)
+{
+	plait_sim *sim = job->sim;
+	const plait_allocator *a = &sim->allocator;
+	job->again = false;
+	plait_parallel_for(&sim->parallel, list_part_range, job, 0, count, 1);
+	bool any_full = false;
+	for (int k = 0; k < count; ++k) {
+		piece_list *list = &job->lists[k];
+		if (list->full) {
+			any_full = true;
+			if (!piece_room(a, list, list->needed)) {
+				return false;
+			}
+		}
+	}
+	if (any_full) {
+		job->again = true;
+		plait_parallel_for(&sim->parallel, list_part_range, job, 0, count, 1);
+	}
+	int keep = *out->out_count, total = 0;
+	for (int k = 0; k < count; ++k) {
+		piece_list *list = &job->lists[k];
+		if (list->full) {
+			list->count = 0;
+			list->full = false;
+			pair_pass again = {.sim = sim,
+			                   .mc = job->mc,
+			                   .stage = STAGE_GATHER,
+			                   .around_only = job->around_only,
+			                   .out_pairs = &list->pairs,
+			                   .out_count = &list->count,
+			                   .out_capacity = &list->capacity};
+			job->list_part(job, &again, k);
+			list->features_kept = again.features_kept;
+			list->features_left_out = again.features_left_out;
+		}
+		out->features_kept += list->features_kept;
+		out->features_left_out += list->features_left_out;
+		list->offset = total;
+		total += list->count;
+	}
+	if (!grow_pairs(a, out->out_pairs, out->out_capacity, keep, total)) {
+		job->mc->out_of_memory = true;
+		return true;
+	}
+	join_job join = {job->lists, *out->out_pairs + keep};
+	plait_parallel_for(&sim->parallel, join_lists, &join, 0, count, JOIN_GRAIN);
+	*out->out_count = keep + total;
+	return true;
+}
+
+static void list_gather_piece(const parts_job *job, pair_pass *pass, int k)
+{
+	plait_mesh_contacts_list_piece(job->mc, pass, &job->mc->pieces[k]);
 }
 
 /* Cuts the traversals of stage `of` into mc->pieces (piece_count 0 when they do not fit); returns
@@ -224,121 +314,22 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 			return false;
 		}
 	}
-	piece_job job = {sim, mc, false};
-	plait_parallel_for(&sim->parallel, list_pieces, &job, 0, mc->piece_count, 1);
-	/* The pieces that ran out of room know now how much they need: listed again side by side
-	 * (the same pairs: a piece's list depends on nothing but the piece). */
-	bool any_full = false;
-	for (int k = 0; k < mc->piece_count; ++k) {
-		piece_list *list = &mc->piece_lists[k];
-		if (list->full) {
-			any_full = true;
-			if (!piece_room(a, list, list->needed)) {
-				return false;
-			}
-		}
-	}
-	if (any_full) {
-		job.again = true;
-		plait_parallel_for(&sim->parallel, list_pieces, &job, 0, mc->piece_count, 1);
-	}
-	int total = 0;
-	for (int k = 0; k < mc->piece_count; ++k) {
-		piece_list *list = &mc->piece_lists[k];
-		if (list->full) {
-			/* Again here, where its list may grow (a piece that still found no room). */
-			list->count = 0;
-			pair_pass again = {.sim = sim,
-			                   .mc = mc,
-			                   .stage = STAGE_GATHER,
-			                   .out_pairs = &list->pairs,
-			                   .out_count = &list->count,
-			                   .out_capacity = &list->capacity};
-			plait_mesh_contacts_list_piece(mc, &again, &mc->pieces[k]);
-			list->full = false;
-			list->features_kept = again.features_kept;
-			list->features_left_out = again.features_left_out;
-		}
-		pass->features_kept += list->features_kept;
-		pass->features_left_out += list->features_left_out;
-		total += list->count;
-	}
-	if (total > mc->pair_capacity) {
-		contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)total);
-		if (bigger == NULL) {
-			mc->out_of_memory = true;
-			return true;
-		}
-		plait_free(a, mc->pairs);
-		mc->pairs = bigger;
-		mc->pair_capacity = total;
-	}
-	mc->pair_count = 0;
-	for (int k = 0; k < mc->piece_count; ++k) {
-		mc->piece_lists[k].offset = mc->pair_count;
-		mc->pair_count += mc->piece_lists[k].count;
-	}
-	join_job join = {mc->piece_lists, mc->pairs};
-	plait_parallel_for(&sim->parallel, join_lists, &join, 0, mc->piece_count, JOIN_GRAIN);
-	return true;
+	parts_job job = {.sim = sim, .mc = mc, .lists = mc->piece_lists, .list_part = list_gather_piece};
+	return list_parts(&job, mc->piece_count, pass);
 }
 
 /* ---- Re-listing around strayed vertices on the workers ----------------------------------------- */
 
-typedef struct around_job {
-	plait_sim *sim;
-	plait_mesh_contacts *mc;
-	int run;    /* flagged elements per run */
-	bool again; /* only the runs that ran out of room */
-} around_job;
-
-static void list_around_runs(void *context, int begin, int end)
+/* Run k of the flagged elements (mc->around_elements): each one's pairs, in order. */
+static void list_around_run(const parts_job *job, pair_pass *pass, int k)
 {
-	around_job *job = context;
-	plait_mesh_contacts *mc = job->mc;
-	for (int k = begin; k < end; ++k) {
-		piece_list *list = &mc->around_lists[k];
-		if (job->again && !list->full) {
-			continue;
-		}
-		list->count = 0;
-		pair_pass pass = {.sim = job->sim,
-		                  .mc = mc,
-		                  .stage = STAGE_GATHER,
-		                  .around_only = true,
-		                  .out_pairs = &list->pairs,
-		                  .out_count = &list->count,
-		                  .out_capacity = &list->capacity,
-		                  .fixed_capacity = true};
-		object_pass objects = {&pass, 0, 0};
-		int last = (k + 1) * job->run < mc->around_count ? (k + 1) * job->run : mc->around_count;
-		for (int j = k * job->run; j < last; ++j) {
-			plait_mesh_contacts_query_around_element(job->sim, mc, mc->around_elements[j], true,
-			                                         plait_mesh_contacts_visit_object_elements, &objects);
-		}
-		list->full = pass.full;
-		list->needed = list->count + pass.overflow;
+	const plait_mesh_contacts *mc = job->mc;
+	object_pass objects = {pass, 0, 0};
+	int last = (k + 1) * job->run < mc->around_count ? (k + 1) * job->run : mc->around_count;
+	for (int j = k * job->run; j < last; ++j) {
+		plait_mesh_contacts_query_around_element(job->sim, mc, mc->around_elements[j], true,
+		                                         plait_mesh_contacts_visit_object_elements, &objects);
 	}
-}
-
-/* Room for `count` more pairs after the first `keep` of *pairs (which are kept). */
-static bool grow_pairs(const plait_allocator *a, contact_pair **pairs, int *capacity, int keep, int count)
-{
-	if (keep + count <= *capacity) {
-		return true;
-	}
-	int room = keep + count + (keep + count) / 2;
-	contact_pair *bigger = plait_alloc(a, sizeof *bigger * (size_t)room);
-	if (bigger == NULL) {
-		return false;
-	}
-	if (keep > 0) {
-		memcpy(bigger, *pairs, sizeof *bigger * (size_t)keep);
-	}
-	plait_free(a, *pairs);
-	*pairs = bigger;
-	*capacity = room;
-	return true;
 }
 
 int plait_mesh_contacts_collect_around(plait_sim *sim, plait_mesh_contacts *mc)
@@ -389,56 +380,16 @@ bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *
 			return false;
 		}
 	}
-	around_job job = {sim, mc, run, false};
-	plait_parallel_for(&sim->parallel, list_around_runs, &job, 0, runs, 1);
-	/* Runs that ran out of room, given what they needed and listed again side by side. */
-	bool any_full = false;
-	for (int k = 0; k < runs; ++k) {
-		piece_list *list = &mc->around_lists[k];
-		if (list->full) {
-			any_full = true;
-			if (!piece_room(a, list, list->needed)) {
-				return false;
-			}
-		}
+	int kept = *pass->out_count;
+	parts_job job = {.sim = sim,
+	                 .mc = mc,
+	                 .lists = mc->around_lists,
+	                 .list_part = list_around_run,
+	                 .around_only = true,
+	                 .run = run};
+	if (!list_parts(&job, runs, pass)) {
+		return false;
 	}
-	if (any_full) {
-		job.again = true;
-		plait_parallel_for(&sim->parallel, list_around_runs, &job, 0, runs, 1);
-	}
-	int kept = *pass->out_count, total = 0;
-	for (int k = 0; k < runs; ++k) {
-		piece_list *list = &mc->around_lists[k];
-		if (list->full) {
-			/* Again here, where its list may grow (a run that still found no room). */
-			list->count = 0;
-			list->full = false;
-			pair_pass again = {.sim = sim,
-			                   .mc = mc,
-			                   .stage = STAGE_GATHER,
-			                   .around_only = true,
-			                   .out_pairs = &list->pairs,
-			                   .out_count = &list->count,
-			                   .out_capacity = &list->capacity};
-			object_pass objects = {&again, 0, 0};
-			int last = (k + 1) * run < count ? (k + 1) * run : count;
-			for (int j = k * run; j < last; ++j) {
-				plait_mesh_contacts_query_around_element(sim, mc, mc->around_elements[j], true,
-				                                         plait_mesh_contacts_visit_object_elements, &objects);
-			}
-		}
-		total += list->count;
-	}
-	mc->around_pairs_per_element = (float)total / (float)count;
-	if (!grow_pairs(a, pass->out_pairs, pass->out_capacity, kept, total)) {
-		mc->out_of_memory = true;
-		return true;
-	}
-	for (int k = 0; k < runs; ++k) {
-		mc->around_lists[k].offset = *pass->out_count - kept;
-		*pass->out_count += mc->around_lists[k].count;
-	}
-	join_job join = {mc->around_lists, *pass->out_pairs + kept};
-	plait_parallel_for(&sim->parallel, join_lists, &join, 0, runs, JOIN_GRAIN);
+	mc->around_pairs_per_element = (float)(*pass->out_count - kept) / (float)count;
 	return true;
 }
