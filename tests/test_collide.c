@@ -572,39 +572,58 @@ Test(collide, a_sheet_shot_at_another_at_100_m_per_s_stays_on_its_side)
 	plait_destroy_world(world);
 }
 
-/* A 16 x 16 quad sheet 0.6 m wide dropped onto a sphere mesh for `frames` frames, the
- * collider pass's clearances (sim.h) used or not; the sheet's positions into x (289 vertices).
- * Returns how many of its vertices ended with a known clearance beyond their radius. */
-static int sheet_on_sphere_mesh_positions(bool clearances, bool slab, int frames, plait_vec3 *x)
+/* A world with a rigid mesh collider of zero thickness (the 48-band sphere of radius 0.5 m
+ * unless `mesh` is given) and an n x n quad sheet 0.6 m wide, 1 cm thick, 0.2 m above its top;
+ * the sheet into *cloth. The caller frees *ball (made either way). */
+static plait_world_id sheet_over_mesh(int n, const plait_mesh_def *mesh, sphere_mesh *ball,
+                                      plait_object_id *cloth)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.air_density = 0.0f;
 	plait_world_id world = plait_create_world(&wdef, NULL);
-	sphere_mesh ball = make_sphere_mesh(48);
-	plait_collider_def sphere = plait_default_collider_def();
-	sphere.shape = PLAIT_SHAPE_MESH;
-	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
-	/* Or a slab 20 m wide with its top where the sphere's is: two triangles of 20 m meet under
-	 * the sheet, and the sweep's rounding allowance grows with them. */
-	plait_vec3 slab_x[8] = {{-10, 0.3f, -10}, {10, 0.3f, -10}, {10, 0.3f, 10}, {-10, 0.3f, 10},
-	                        {-10, 0.5f, -10}, {10, 0.5f, -10}, {10, 0.5f, 10}, {-10, 0.5f, 10}};
-	int slab_sizes[6] = {4, 4, 4, 4, 4, 4};
-	int slab_indices[24] = {4, 7, 6, 5, 0, 1, 2, 3, 0, 4, 5, 1, 3, 2, 6, 7, 0, 3, 7, 4, 1, 5, 6, 2};
-	if (slab) {
-		sphere.mesh = (plait_mesh_def){slab_x, 8, slab_sizes, 6, slab_indices};
-	}
-	sphere.surface.thickness = 0.0f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
-	test_grid grid = test_grid_make(16, 16, 0.6f, 0.6f);
+	*ball = make_sphere_mesh(48);
+	plait_collider_def collider = plait_default_collider_def();
+	collider.shape = PLAIT_SHAPE_MESH;
+	collider.mesh = mesh != NULL ? *mesh
+	                             : (plait_mesh_def){ball->x, ball->vertex_count, ball->sizes,
+	                                                ball->face_count, ball->indices};
+	collider.surface.thickness = 0.0f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &collider, NULL)));
+	test_grid grid = test_grid_make(n, n, 0.6f, 0.6f);
 	for (int i = 0; i < grid.vertex_count; ++i) {
 		grid.positions[i].y = 0.7f;
 	}
 	plait_cloth_def def = plait_default_cloth_def();
 	def.mesh = test_grid_mesh(&grid);
 	def.surface.thickness = 0.01f;
-	plait_object_id cloth = plait_create_cloth(world, &def, NULL);
-	cr_assert(!plait_object_id_is_null(cloth));
+	*cloth = plait_create_cloth(world, &def, NULL);
+	cr_assert(!plait_object_id_is_null(*cloth));
 	test_grid_free(&grid);
+	return world;
+}
+
+static void sphere_mesh_free(sphere_mesh *ball)
+{
+	free(ball->x);
+	free(ball->sizes);
+	free(ball->indices);
+}
+
+/* A 16 x 16 quad sheet 0.6 m wide dropped onto a sphere mesh for `frames` frames, the
+ * collider pass's clearances (sim.h) used or not; the sheet's positions into x (289 vertices).
+ * Returns how many of its vertices ended with a known clearance beyond their radius. */
+static int sheet_on_sphere_mesh_positions(bool clearances, bool slab, int frames, plait_vec3 *x)
+{
+	/* Or a slab 20 m wide with its top where the sphere's is: two triangles of 20 m meet under
+	 * the sheet, and the sweep's rounding allowance grows with them. */
+	plait_vec3 slab_x[8] = {{-10, 0.3f, -10}, {10, 0.3f, -10}, {10, 0.3f, 10}, {-10, 0.3f, 10},
+	                        {-10, 0.5f, -10}, {10, 0.5f, -10}, {10, 0.5f, 10}, {-10, 0.5f, 10}};
+	int slab_sizes[6] = {4, 4, 4, 4, 4, 4};
+	int slab_indices[24] = {4, 7, 6, 5, 0, 1, 2, 3, 0, 4, 5, 1, 3, 2, 6, 7, 0, 3, 7, 4, 1, 5, 6, 2};
+	plait_mesh_def slab_mesh = {slab_x, 8, slab_sizes, 6, slab_indices};
+	sphere_mesh ball;
+	plait_object_id cloth;
+	plait_world_id world = sheet_over_mesh(16, slab ? &slab_mesh : NULL, &ball, &cloth);
 	plait_sim *sim = &world.world->sim;
 	plait_collider *c = &sim->colliders[0];
 	for (int frame = 0; frame < frames; ++frame) {
@@ -629,9 +648,7 @@ static int sheet_on_sphere_mesh_positions(bool clearances, bool slab, int frames
 		c->clear_capacity = 0;
 	}
 	plait_destroy_world(world);
-	free(ball.x);
-	free(ball.sizes);
-	free(ball.indices);
+	sphere_mesh_free(&ball);
 	return clear;
 }
 
@@ -658,24 +675,9 @@ Test(collide, passing_over_particles_clear_of_a_mesh_collider_changes_nothing)
  * Quads of 3.75 cm, long enough for the sphere to keep some of its corners and edges. */
 Test(collide, passing_over_smooth_node_pairs_lists_the_same_pairs)
 {
-	plait_world_def wdef = plait_default_world_def();
-	wdef.air_density = 0.0f;
-	plait_world_id world = plait_create_world(&wdef, NULL);
-	sphere_mesh ball = make_sphere_mesh(48);
-	plait_collider_def sphere = plait_default_collider_def();
-	sphere.shape = PLAIT_SHAPE_MESH;
-	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
-	sphere.surface.thickness = 0.0f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
-	test_grid grid = test_grid_make(16, 16, 0.6f, 0.6f);
-	for (int i = 0; i < grid.vertex_count; ++i) {
-		grid.positions[i].y = 0.7f;
-	}
-	plait_cloth_def def = plait_default_cloth_def();
-	def.mesh = test_grid_mesh(&grid);
-	def.surface.thickness = 0.01f;
-	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, NULL)));
-	test_grid_free(&grid);
+	sphere_mesh ball;
+	plait_object_id cloth;
+	plait_world_id world = sheet_over_mesh(16, NULL, &ball, &cloth);
 	cr_assert(test_step_frames(world, 15)); /* lying on the sphere */
 	plait_sim *sim = &world.world->sim;
 	plait_mesh_contacts *mc = sim->mesh_contacts;
@@ -701,9 +703,7 @@ Test(collide, passing_over_smooth_node_pairs_lists_the_same_pairs)
 	}
 	free(walked);
 	plait_destroy_world(world);
-	free(ball.x);
-	free(ball.sizes);
-	free(ball.indices);
+	sphere_mesh_free(&ball);
 }
 
 /* The filter of a sphere mesh's smooth corners and edges decides with a bound on each cloth
@@ -712,24 +712,9 @@ Test(collide, passing_over_smooth_node_pairs_lists_the_same_pairs)
  * reads that bound) count as strayed, and mending the list sets the bound from the edge now. */
 Test(collide, a_cloth_edge_outgrowing_its_bound_is_mended_around)
 {
-	plait_world_def wdef = plait_default_world_def();
-	wdef.air_density = 0.0f;
-	plait_world_id world = plait_create_world(&wdef, NULL);
-	sphere_mesh ball = make_sphere_mesh(48);
-	plait_collider_def sphere = plait_default_collider_def();
-	sphere.shape = PLAIT_SHAPE_MESH;
-	sphere.mesh = (plait_mesh_def){ball.x, ball.vertex_count, ball.sizes, ball.face_count, ball.indices};
-	sphere.surface.thickness = 0.0f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, NULL)));
-	test_grid grid = test_grid_make(24, 24, 0.6f, 0.6f);
-	for (int i = 0; i < grid.vertex_count; ++i) {
-		grid.positions[i].y = 0.7f;
-	}
-	plait_cloth_def def = plait_default_cloth_def();
-	def.mesh = test_grid_mesh(&grid);
-	def.surface.thickness = 0.01f;
-	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, NULL)));
-	test_grid_free(&grid);
+	sphere_mesh ball;
+	plait_object_id cloth;
+	plait_world_id world = sheet_over_mesh(24, NULL, &ball, &cloth);
 	cr_assert(test_step_frames(world, 1));
 	plait_sim *sim = &world.world->sim;
 	plait_mesh_contacts *mc = sim->mesh_contacts;
@@ -775,9 +760,7 @@ Test(collide, a_cloth_edge_outgrowing_its_bound_is_mended_around)
 	cr_expect(plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays));
 	cr_expect_eq(strays, 0, "%d vertices still strayed after mending", strays);
 	plait_destroy_world(world);
-	free(ball.x);
-	free(ball.sizes);
-	free(ball.indices);
+	sphere_mesh_free(&ball);
 }
 
 /* Two weightless sheets closing at 20 m/s (0.11 m a substep, against 2 cm of contact distance):
