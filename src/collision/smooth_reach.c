@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "collision/closest.h"
+#include "core/parallel.h"
 #include "topology/topology.h"
 
 /* Radians: a face this steep against a feature's reference normal ends its smooth reach. */
@@ -17,25 +18,66 @@ typedef struct face_sample {
 } face_sample;
 
 typedef struct feature_query {
-	const plait_allocator *allocator;
 	const plait_mesh_shape *shape;
-	const bool *open; /* per triangle: an edge of it is not shared by exactly two */
-	vec3 a, b;        /* a corner (b == a) or an edge */
+	const bool *open;       /* per triangle: an edge of it is not shared by exactly two */
+	const vec3 *centre;     /* per triangle: the centre of a ball that holds it */
+	const float *radius;    /* and its radius, rounded up */
+	vec3 a, b;              /* a corner (b == a) or an edge */
+	int vertex_a, vertex_b; /* their mesh vertices (the same for a corner) */
 	bool corner;
 	vec3 normal; /* unit reference normal */
 	float range;
-	face_sample *samples;
-	int count, capacity;
-	bool failed;
+	float first_share;    /* of the range, sampled first (smooth_reach) */
+	face_sample *samples; /* room for every triangle: a query meets each at most once */
+	int count;
 } feature_query;
 
-static int compare_samples(const void *a, const void *b)
+/* Sorts samples by distance (the reach takes every face within a distance at once, so the order
+ * of equal distances does not matter): quicksort, insertion sort below 16. */
+static void sort_samples(face_sample *s, int count)
 {
-	const face_sample *x = a, *y = b;
-	if (x->distance != y->distance) {
-		return x->distance < y->distance ? -1 : 1;
+	while (count > 16) {
+		float a = s[0].distance, b = s[count / 2].distance, c = s[count - 1].distance;
+		float pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+		int i = 0, j = count - 1;
+		for (;;) {
+			while (s[i].distance < pivot) {
+				++i;
+			}
+			while (s[j].distance > pivot) {
+				--j;
+			}
+			if (i >= j) {
+				break;
+			}
+			face_sample swap = s[i];
+			s[i++] = s[j];
+			s[j--] = swap;
+		}
+		/* [0, j] holds distances <= pivot, (j, count) >= pivot: the smaller part recursively. */
+		int left = j + 1;
+		if (left < count - left) {
+			sort_samples(s, left);
+			s += left;
+			count -= left;
+		} else {
+			sort_samples(s + left, count - left);
+			count = left;
+		}
 	}
-	return x->angle < y->angle ? -1 : x->angle > y->angle;
+	for (int i = 1; i < count; ++i) {
+		face_sample x = s[i];
+		int j = i;
+		for (; j > 0 && s[j - 1].distance > x.distance; --j) {
+			s[j] = s[j - 1];
+		}
+		s[j] = x;
+	}
+}
+
+static float largest_abs(vec3 v)
+{
+	return plait_maxf(fabsf(v.x), plait_maxf(fabsf(v.y), fabsf(v.z)));
 }
 
 /* The distance from a corner or edge to a triangle (an edge through the triangle is at 0). */
@@ -66,31 +108,35 @@ static float feature_triangle_distance(vec3 a, vec3 b, bool corner, const vec3 *
 static void sample_face(int triangle, void *context)
 {
 	feature_query *q = context;
+	/* Faces whose ball is out of range are passed over before their distance: the distance
+	 * from the feature to the ball's centre, less its radius, bounds theirs from below (less
+	 * an allowance for the rounding of both measures). */
+	vec3 c = q->centre[triangle], ab = v3_sub(q->b, q->a);
+	float length_sq = v3_dot(ab, ab);
+	float s =
+	    length_sq > 0.0f ? plait_minf(plait_maxf(v3_dot(v3_sub(c, q->a), ab) / length_sq, 0.0f), 1.0f) : 0.0f;
+	float scale = 1.0f + largest_abs(c) + largest_abs(q->a) + largest_abs(q->b) + q->radius[triangle];
+	float beyond = v3_length(v3_sub(c, v3_mul_add(q->a, s, ab))) - q->radius[triangle] - 4e-6f * scale;
+	if (beyond > q->range + 1e-6f) {
+		return;
+	}
 	const int *tri = q->shape->triangles[triangle];
 	vec3 t[3] = {q->shape->positions[tri[0]], q->shape->positions[tri[1]], q->shape->positions[tri[2]]};
-	/* Less a rounding allowance: the distance must not be overstated. */
-	float distance = plait_maxf(feature_triangle_distance(q->a, q->b, q->corner, t) - 1e-6f, 0.0f);
-	if (distance > q->range || q->failed) {
+	/* A face with a vertex of the feature is at 0 (as measured: a corner's closest point is
+	 * itself); the others less a rounding allowance: the distance must not be overstated. */
+	bool touches = false;
+	for (int k = 0; k < 3; ++k) {
+		touches = touches || tri[k] == q->vertex_a || tri[k] == q->vertex_b;
+	}
+	float distance =
+	    touches ? 0.0f : plait_maxf(feature_triangle_distance(q->a, q->b, q->corner, t) - 1e-6f, 0.0f);
+	if (distance > q->range) {
 		return;
 	}
 	vec3 n = q->shape->normals[triangle];
 	float angle = SMOOTH_STEEPEST; /* open or degenerate: a wall */
 	if (!q->open[triangle] && v3_length_sq(n) > 0.0f) {
 		angle = acosf(plait_maxf(-1.0f, plait_minf(1.0f, v3_dot(n, q->normal))));
-	}
-	if (q->count == q->capacity) {
-		int capacity = q->capacity < 64 ? 64 : 2 * q->capacity;
-		face_sample *bigger = plait_alloc(q->allocator, sizeof *bigger * (size_t)capacity);
-		if (bigger == NULL) {
-			q->failed = true;
-			return;
-		}
-		if (q->count > 0) {
-			memcpy(bigger, q->samples, sizeof *bigger * (size_t)q->count);
-		}
-		plait_free(q->allocator, q->samples);
-		q->samples = bigger;
-		q->capacity = capacity;
 	}
 	q->samples[q->count++] = (face_sample){distance, angle};
 }
@@ -106,10 +152,7 @@ static float reach_within(feature_query *q, float budget, float range)
 	q->range = range;
 	plait_mesh_shape_visit(q->shape, v3_sub(lower, grow), v3_add(upper, grow), true, sample_face, q);
 	q->range = full;
-	if (q->failed) {
-		return -1.0f;
-	}
-	qsort(q->samples, (size_t)q->count, sizeof *q->samples, compare_samples);
+	sort_samples(q->samples, q->count);
 	/* A(t) steps up as faces come within t + budget; F grows by tan A over each step. */
 	float t = 0.0f, fall = 0.0f, steepest = 0.0f;
 	int k = 0;
@@ -134,13 +177,17 @@ static float reach_within(feature_query *q, float budget, float range)
 	}
 }
 
-/* The same over q->range, sampled in widening rounds: most reaches end well inside it. */
+/* The same over q->range, sampled in widening rounds: on a sharp mesh most reaches end well
+ * inside it. A reach that ends inside a round's range is the whole range's (the faces beyond
+ * come after it), so the rounds change only the cost: where the last feature took them all (a
+ * smooth mesh, its reaches long), the next starts with the whole range. */
 static float smooth_reach(feature_query *q, float budget)
 {
-	float range = budget + 0.25f * (q->range - budget);
+	float range = budget + q->first_share * (q->range - budget);
 	for (;;) {
 		float reach = reach_within(q, budget, range);
 		if (reach < 0.999f * (range - budget) || range >= q->range) {
+			q->first_share = range >= q->range && range > budget + 0.25f * (q->range - budget) ? 1.0f : 0.25f;
 			return reach;
 		}
 		range = plait_minf(q->range, budget + 2.0f * (range - budget));
@@ -167,31 +214,120 @@ static vec3 reference_normal(vec3 sum, int count)
 	return length > 0.5f * (float)count ? v3_scale(sum, 1.0f / length) : v3(0.0f, 0.0f, 0.0f);
 }
 
-bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *a, float budget,
-                               float range, float *vertex_reach_out, float *edge_reach_out)
+/* Features are measured side by side on the workers, a chunk each with its own samples (each
+ * feature's reach depends only on the shape, so the results are the same on any number). */
+typedef struct reach_job {
+	feature_query base; /* shape, open, centres and radii, range */
+	float budget;
+	const plait_triangle_edge *edges;
+	const int *runs;     /* edges: the first key of each manifold edge's run */
+	const vec3 *normals; /* corners: each vertex's summed face normals */
+	const int *star;
+	const float *star_cos;
+	float *edge_reach;    /* by first key */
+	float *vertex_reach;  /* corners: in (the least of its edges'), out */
+	face_sample *samples; /* room for a triangle count per chunk */
+	int grain;
+} reach_job;
+
+static feature_query chunk_query(const reach_job *job, int begin)
+{
+	feature_query q = job->base;
+	q.samples = job->samples + (size_t)(begin / job->grain) * (size_t)job->base.shape->triangle_count;
+	return q;
+}
+
+static void edge_reaches(void *context, int begin, int end)
+{
+	const reach_job *job = context;
+	feature_query q = chunk_query(job, begin);
+	const plait_mesh_shape *shape = q.shape;
+	float range = q.range;
+	for (int r = begin; r < end; ++r) {
+		const plait_triangle_edge *edge = &job->edges[job->runs[r]];
+		q.a = shape->positions[edge[0].low];
+		q.b = shape->positions[edge[0].high];
+		q.vertex_a = edge[0].low;
+		q.vertex_b = edge[0].high;
+		q.corner = false;
+		q.normal =
+		    reference_normal(v3_add(shape->normals[edge[0].triangle], shape->normals[edge[1].triangle]), 2);
+		q.range = capped_range(range, job->budget, v3_dot(q.normal, shape->normals[edge[0].triangle]));
+		job->edge_reach[job->runs[r]] = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, job->budget) : -1.0f;
+	}
+}
+
+static void corner_reaches(void *context, int begin, int end)
+{
+	const reach_job *job = context;
+	feature_query q = chunk_query(job, begin);
+	const plait_mesh_shape *shape = q.shape;
+	float range = q.range;
+	for (int v = begin; v < end; ++v) {
+		if (job->star[v] == 0 || !(job->vertex_reach[v] > 0.0f)) {
+			continue;
+		}
+		q.a = q.b = shape->positions[v];
+		q.vertex_a = q.vertex_b = v;
+		q.corner = true;
+		q.normal = reference_normal(job->normals[v], job->star[v]);
+		q.range = capped_range(range, job->budget, job->star_cos[v]);
+		float reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, job->budget) : -1.0f;
+		job->vertex_reach[v] = plait_minf(job->vertex_reach[v], reach);
+	}
+}
+
+static void run_chunks(plait_parallel *parallel, plait_range_fn *fn, void *context, int count, int grain)
+{
+	if (count > 0 && parallel != NULL) {
+		plait_parallel_for(parallel, fn, context, 0, count, grain);
+	} else if (count > 0) {
+		fn(context, 0, count);
+	}
+}
+
+/* Chunks per worker: enough for an even share when features cost unevenly. */
+#define CHUNKS_PER_WORKER 4
+
+bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *a,
+                               plait_parallel *parallel, float budget, float range, float *vertex_reach_out,
+                               float *edge_reach_out)
 {
 	int nt = shape->triangle_count, nv = shape->vertex_count;
-	plait_triangle_edge *edges = plait_alloc(a, sizeof *edges * (size_t)(3 * nt));
-	int *edge_of = plait_alloc(a, sizeof(int) * (size_t)(3 * nt)); /* (t, k) -> first key of its run */
-	bool *open = plait_alloc_zero(a, (size_t)nt, sizeof(bool));
-	float *edge_reach = plait_alloc(a, sizeof(float) * (size_t)(3 * nt));
-	float *vertex_reach = plait_alloc(a, sizeof(float) * (size_t)nv);
-	vec3 *vertex_normal = plait_alloc_zero(a, (size_t)nv, sizeof(vec3));
-	int *star = plait_alloc_zero(a, (size_t)nv, sizeof(int));
-	float *star_cos = plait_alloc(a, sizeof(float) * (size_t)nv); /* of the steepest face of its star */
-	feature_query q = {.allocator = a, .shape = shape, .open = open, .corner = true, .range = range};
-	bool ok = edges != NULL && edge_of != NULL && open != NULL && edge_reach != NULL &&
-	          vertex_reach != NULL && vertex_normal != NULL && star != NULL && star_cos != NULL;
+	int chunks = CHUNKS_PER_WORKER * (parallel != NULL ? parallel->worker_count : 1);
+	plait_triangle_edge *edges = plait_alloc(a, sizeof *edges * (size_t)(3 * nt + 1));
+	int *edge_of = plait_alloc(a, sizeof(int) * (size_t)(3 * nt + 1)); /* (t, k) -> first key of its run */
+	int *runs = plait_alloc(a, sizeof(int) * (size_t)(3 * nt + 1));
+	bool *open = plait_alloc_zero(a, (size_t)nt + 1, sizeof(bool));
+	float *edge_reach = plait_alloc(a, sizeof(float) * (size_t)(3 * nt + 1));
+	float *vertex_reach = plait_alloc(a, sizeof(float) * (size_t)(nv + 1));
+	vec3 *vertex_normal = plait_alloc_zero(a, (size_t)nv + 1, sizeof(vec3));
+	int *star = plait_alloc_zero(a, (size_t)nv + 1, sizeof(int));
+	float *star_cos = plait_alloc(a, sizeof(float) * (size_t)(nv + 1)); /* of the steepest face of its star */
+	vec3 *centre = plait_alloc(a, sizeof(vec3) * (size_t)(nt + 1));
+	float *radius = plait_alloc(a, sizeof(float) * (size_t)(nt + 1));
+	face_sample *samples = plait_alloc(a, sizeof *samples * (size_t)chunks * (size_t)(nt + 1));
+	bool ok = edges != NULL && edge_of != NULL && runs != NULL && open != NULL && edge_reach != NULL &&
+	          vertex_reach != NULL && vertex_normal != NULL && star != NULL && star_cos != NULL &&
+	          centre != NULL && radius != NULL && samples != NULL;
 	if (ok) {
 		for (int t = 0; t < nt; ++t) {
+			const int *tri = shape->triangles[t];
+			vec3 p0 = shape->positions[tri[0]], p1 = shape->positions[tri[1]], p2 = shape->positions[tri[2]];
+			vec3 c = v3_scale(v3_add(p0, v3_add(p1, p2)), 1.0f / 3.0f);
+			float far_sq = plait_maxf(v3_length_sq(v3_sub(p0, c)),
+			                          plait_maxf(v3_length_sq(v3_sub(p1, c)), v3_length_sq(v3_sub(p2, c))));
+			centre[t] = c;
+			radius[t] = 1.00001f * sqrtf(far_sq); /* rounded up: the ball must hold the face */
 			for (int k = 0; k < 3; ++k) {
-				int i = shape->triangles[t][k], j = shape->triangles[t][(k + 1) % 3];
+				int i = tri[k], j = tri[(k + 1) % 3];
 				edges[3 * t + k] = (plait_triangle_edge){i < j ? i : j, i < j ? j : i, t, k};
 				vertex_normal[i] = v3_add(vertex_normal[i], shape->normals[t]);
 				star[i] += 1;
 			}
 		}
 		plait_sort_triangle_edges(edges, 3 * nt);
+		int run_count = 0;
 		for (int start = 0; start < 3 * nt;) {
 			int end = start + 1;
 			while (end < 3 * nt && edges[end].low == edges[start].low &&
@@ -201,6 +337,10 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 			for (int k = start; k < end; ++k) {
 				edge_of[3 * edges[k].triangle + edges[k].corner] = start;
 				open[edges[k].triangle] = open[edges[k].triangle] || end - start != 2;
+			}
+			edge_reach[start] = -1.0f; /* open or shared by more than two: no reach */
+			if (end - start == 2) {
+				runs[run_count++] = start;
 			}
 			start = end;
 		}
@@ -215,44 +355,36 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 				star_cos[v] = plait_minf(star_cos[v], v3_dot(n0, shape->normals[t]));
 			}
 		}
+		reach_job job = {.base = {.shape = shape,
+		                          .open = open,
+		                          .centre = centre,
+		                          .radius = radius,
+		                          .range = range,
+		                          .first_share = 0.25f},
+		                 .budget = budget,
+		                 .edges = edges,
+		                 .runs = runs,
+		                 .normals = vertex_normal,
+		                 .star = star,
+		                 .star_cos = star_cos,
+		                 .edge_reach = edge_reach,
+		                 .vertex_reach = vertex_reach,
+		                 .samples = samples};
 		/* Edges first: a corner is kept whenever an edge of it is. */
-		for (int start = 0; start < 3 * nt && !q.failed;) {
+		job.grain = (run_count + chunks - 1) / chunks > 0 ? (run_count + chunks - 1) / chunks : 1;
+		run_chunks(parallel, edge_reaches, &job, run_count, job.grain);
+		for (int start = 0; start < 3 * nt;) {
 			int end = start + 1;
 			while (end < 3 * nt && edges[end].low == edges[start].low &&
 			       edges[end].high == edges[start].high) {
 				++end;
 			}
-			float reach = -1.0f;
-			if (end - start == 2) {
-				q.a = shape->positions[edges[start].low];
-				q.b = shape->positions[edges[start].high];
-				q.corner = false;
-				q.normal = reference_normal(
-				    v3_add(shape->normals[edges[start].triangle], shape->normals[edges[start + 1].triangle]),
-				    2);
-				q.range =
-				    capped_range(range, budget, v3_dot(q.normal, shape->normals[edges[start].triangle]));
-				reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, budget) : -1.0f;
-			}
-			edge_reach[start] = reach;
-			vertex_reach[edges[start].low] = plait_minf(vertex_reach[edges[start].low], reach);
-			vertex_reach[edges[start].high] = plait_minf(vertex_reach[edges[start].high], reach);
+			vertex_reach[edges[start].low] = plait_minf(vertex_reach[edges[start].low], edge_reach[start]);
+			vertex_reach[edges[start].high] = plait_minf(vertex_reach[edges[start].high], edge_reach[start]);
 			start = end;
 		}
-		for (int v = 0; v < nv && !q.failed; ++v) {
-			if (star[v] == 0 || !(vertex_reach[v] > 0.0f)) {
-				continue;
-			}
-			q.a = q.b = shape->positions[v];
-			q.corner = true;
-			q.normal = reference_normal(vertex_normal[v], star[v]);
-			q.range = capped_range(range, budget, star_cos[v]);
-			float reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, budget) : -1.0f;
-			vertex_reach[v] = plait_minf(vertex_reach[v], reach);
-		}
-		ok = !q.failed;
-	}
-	if (ok) {
+		job.grain = (nv + chunks - 1) / chunks > 0 ? (nv + chunks - 1) / chunks : 1;
+		run_chunks(parallel, corner_reaches, &job, nv, job.grain);
 		memcpy(vertex_reach_out, vertex_reach, sizeof(float) * (size_t)nv);
 		for (int t = 0; t < nt; ++t) {
 			for (int k = 0; k < 3; ++k) {
@@ -260,9 +392,12 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 			}
 		}
 	}
-	plait_free(a, q.samples);
+	plait_free(a, samples);
+	plait_free(a, centre);
+	plait_free(a, radius);
 	plait_free(a, edges);
 	plait_free(a, edge_of);
+	plait_free(a, runs);
 	plait_free(a, open);
 	plait_free(a, edge_reach);
 	plait_free(a, vertex_reach);

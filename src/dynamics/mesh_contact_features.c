@@ -70,7 +70,7 @@ static bool collider_reaches(plait_sim *sim, plait_mesh_contacts *mc, collision_
 	    plait_alloc(a, sizeof(float) * (size_t)(shape->vertex_count > 0 ? shape->vertex_count : 1));
 	float *edge_reach = plait_alloc(a, sizeof(float) * (size_t)(3 * nt > 0 ? 3 * nt : 1));
 	bool ok = vertex_reach != NULL && edge_reach != NULL &&
-	          plait_mesh_smooth_reaches(shape, a, budget, range, vertex_reach, edge_reach);
+	          plait_mesh_smooth_reaches(shape, a, &sim->parallel, budget, range, vertex_reach, edge_reach);
 	if (ok) {
 		for (int t = 0; t < nt; ++t) {
 			const element *el = &mc->elements[o->first + t];

@@ -283,7 +283,8 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 	case SCENE_HANG_SELF: {
 		n = n > 0 ? n : 128;
 		scene->frames = 300;
-		mesh ball = sphere_mesh(50, 50, 0.5f, (plait_vec3){0.0f, -0.75f, 0.0f});
+		int slices = scene->options.sphere_slices > 0 ? scene->options.sphere_slices : 50;
+		mesh ball = sphere_mesh(slices, slices, 0.5f, (plait_vec3){0.0f, -0.75f, 0.0f});
 		plait_collider_def sphere = plait_default_collider_def();
 		sphere.name = "sphere mesh";
 		sphere.shape = PLAIT_SHAPE_MESH;
@@ -333,7 +334,7 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 collide_scene_options collide_scene_default_options(void)
 {
-	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false};
+	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false, 0};
 }
 
 bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,

@@ -30,6 +30,8 @@ typedef struct collide_scene_options {
 	 * all rigid, 6 substeps of one sweep each, Euclidean tethers), not the default resistances,
 	 * under which 1 kg a vertex stretches the edges at the pins a thousandfold */
 	bool stiff;
+	/* hang-self: the sphere mesh's slices and stacks (0: 50, about 4,900 triangles) */
+	int sphere_slices;
 } collide_scene_options;
 
 typedef struct collide_scene {

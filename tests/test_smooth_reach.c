@@ -1,0 +1,375 @@
+/* Smooth reaches of a rigid mesh's corners and edges (collision/smooth_reach.h): what they are
+ * on meshes whose answer is known, and the same on any number of workers. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "collision/closest.h"
+#include "collision/smooth_reach.h"
+#include "core/float_mode.h"
+#include "core/parallel.h"
+#include "thread_pool.h"
+
+static const plait_allocator heap = {NULL, NULL, NULL};
+
+typedef struct test_mesh {
+	plait_vec3 *x;
+	int *indices;
+	int *sizes;
+	int vertex_count, triangle_count;
+} test_mesh;
+
+static void test_mesh_free(test_mesh *m)
+{
+	free(m->x);
+	free(m->indices);
+	free(m->sizes);
+}
+
+static void add_triangle(test_mesh *m, int a, int b, int c)
+{
+	int t = m->triangle_count++;
+	m->indices[3 * t] = a;
+	m->indices[3 * t + 1] = b;
+	m->indices[3 * t + 2] = c;
+	m->sizes[t] = 3;
+}
+
+/* A closed UV sphere of radius r, outward faces; bumps > 0 ripples its radius. */
+static test_mesh sphere(int slices, int stacks, float r, float bumps)
+{
+	test_mesh m = {0};
+	int rings = stacks - 1;
+	m.x = malloc(sizeof *m.x * (size_t)(rings * slices + 2));
+	m.indices = malloc(sizeof(int) * 3 * (size_t)(2 * slices * stacks));
+	m.sizes = malloc(sizeof(int) * (size_t)(2 * slices * stacks));
+	for (int i = 0; i < rings; ++i) {
+		float theta = 3.14159265f * (float)(i + 1) / (float)stacks;
+		for (int j = 0; j < slices; ++j) {
+			float phi = 6.2831853f * (float)j / (float)slices;
+			float radius = r * (1.0f + bumps * sinf(3.0f * phi) * sinf(4.0f * theta));
+			m.x[i * slices + j] = (plait_vec3){radius * sinf(theta) * cosf(phi), radius * cosf(theta),
+			                                   radius * sinf(theta) * sinf(phi)};
+		}
+	}
+	int top = rings * slices, bottom = top + 1;
+	m.x[top] = (plait_vec3){0.0f, r, 0.0f};
+	m.x[bottom] = (plait_vec3){0.0f, -r, 0.0f};
+	m.vertex_count = rings * slices + 2;
+	for (int j = 0; j < slices; ++j) {
+		int k = (j + 1) % slices;
+		add_triangle(&m, top, k, j);
+		for (int i = 0; i + 1 < rings; ++i) {
+			int a = i * slices + j, b = i * slices + k, c = (i + 1) * slices + j, d = (i + 1) * slices + k;
+			add_triangle(&m, a, b, d);
+			add_triangle(&m, a, d, c);
+		}
+		add_triangle(&m, bottom, (rings - 1) * slices + j, (rings - 1) * slices + k);
+	}
+	return m;
+}
+
+/* An n x n grid of unit cells in the XZ plane, folded up by `fold_deg` along x = fold_at. */
+static test_mesh folded_grid(int n, float cell, int fold_at, float fold_deg)
+{
+	test_mesh m = {0};
+	m.x = malloc(sizeof *m.x * (size_t)(n * n));
+	m.indices = malloc(sizeof(int) * 3 * (size_t)(2 * n * n));
+	m.sizes = malloc(sizeof(int) * (size_t)(2 * n * n));
+	float turn = fold_deg * 3.14159265f / 180.0f;
+	for (int i = 0; i < n; ++i) {
+		for (int j = 0; j < n; ++j) {
+			float u = (float)(i - fold_at) * cell;
+			plait_vec3 p = {u, 0.0f, (float)j * cell};
+			if (u > 0.0f) {
+				p.x = u * cosf(turn);
+				p.y = u * sinf(turn);
+			}
+			m.x[i * n + j] = p;
+		}
+	}
+	m.vertex_count = n * n;
+	for (int i = 0; i + 1 < n; ++i) {
+		for (int j = 0; j + 1 < n; ++j) {
+			int a = i * n + j, b = a + 1, c = a + n, d = c + 1;
+			add_triangle(&m, a, b, d);
+			add_triangle(&m, a, d, c);
+		}
+	}
+	return m;
+}
+
+typedef struct reaches {
+	plait_mesh_shape shape;
+	float *vertex;
+	float *edge;
+} reaches;
+
+/* The mesh's reaches with `workers` workers of a thread pool (1: none, the calling thread). */
+static reaches measure(const test_mesh *m, float budget, float range, int workers)
+{
+	reaches r = {0};
+	plait_mesh_def def = {m->x, m->vertex_count, m->sizes, m->triangle_count, m->indices};
+	plait_error error;
+	cr_assert_eq(plait_mesh_shape_build(&r.shape, &heap, &def, &error), PLAIT_OK, "%s", error.message);
+	r.vertex = malloc(sizeof(float) * (size_t)m->vertex_count);
+	r.edge = malloc(sizeof(float) * 3 * (size_t)r.shape.triangle_count);
+	plait_thread_pool *pool = workers > 1 ? plait_thread_pool_create(workers) : NULL;
+	plait_parallel parallel;
+	plait_parallel_init(&parallel, pool != NULL ? plait_thread_pool_enqueue : NULL,
+	                    pool != NULL ? plait_thread_pool_finish : NULL, pool, workers);
+	plait_float_mode saved = plait_float_mode_enter(); /* as in a step: the workers' mode */
+	plait_parallel_begin(&parallel);
+	bool ok = plait_mesh_smooth_reaches(&r.shape, &heap, workers > 1 ? &parallel : NULL, budget, range,
+	                                    r.vertex, r.edge);
+	plait_parallel_end(&parallel);
+	plait_float_mode_leave(saved);
+	if (pool != NULL) {
+		plait_thread_pool_destroy(pool);
+	}
+	cr_assert(ok);
+	return r;
+}
+
+static void reaches_free(reaches *r)
+{
+	plait_mesh_shape_destroy(&r->shape, &heap);
+	free(r->vertex);
+	free(r->edge);
+}
+
+Test(smooth_reach, the_same_on_any_number_of_workers)
+{
+	/* A rippled sphere: reaches of every length, and features that cost unevenly. */
+	test_mesh m = sphere(36, 24, 0.5f, 0.03f);
+	reaches one = measure(&m, 0.002f, 0.08f, 1);
+	int spread = 0;
+	for (int v = 0; v < m.vertex_count; ++v) {
+		spread += one.vertex[v] > 0.0f && one.vertex[v] < 0.08f - 0.002f;
+	}
+	cr_assert_gt(spread, m.vertex_count / 4, "only %d corners have reaches inside the range", spread);
+	for (int workers = 2; workers <= 8; workers *= 4) {
+		reaches many = measure(&m, 0.002f, 0.08f, workers);
+		cr_expect(memcmp(one.vertex, many.vertex, sizeof(float) * (size_t)m.vertex_count) == 0,
+		          "corner reaches differ on %d workers", workers);
+		cr_expect(memcmp(one.edge, many.edge, sizeof(float) * 3 * (size_t)one.shape.triangle_count) == 0,
+		          "edge reaches differ on %d workers", workers);
+		reaches_free(&many);
+	}
+	reaches_free(&one);
+	test_mesh_free(&m);
+}
+
+/* The reach of a corner (b == a) or an edge by the definition, without shortcuts: every face
+ * within range, its exact distance and its angle against `normal`, taken nearest first. */
+typedef struct sample {
+	float distance, angle;
+} sample;
+
+static int by_distance(const void *a, const void *b)
+{
+	const sample *x = a, *y = b;
+	return x->distance < y->distance ? -1 : x->distance > y->distance;
+}
+
+static float point_triangle_distance(vec3 p, const vec3 *t)
+{
+	int region;
+	return v3_length(v3_sub(p, plait_closest_point_on_triangle(p, t[0], t[1], t[2], &region, NULL)));
+}
+
+static float feature_distance(vec3 a, vec3 b, const vec3 *t)
+{
+	float d = fminf(point_triangle_distance(a, t), point_triangle_distance(b, t));
+	for (int k = 0; k < 3; ++k) {
+		float s, u;
+		d = fminf(d, sqrtf(plait_closest_segments(a, b, t[k], t[(k + 1) % 3], &s, &u)));
+	}
+	vec3 n = v3_cross(v3_sub(t[1], t[0]), v3_sub(t[2], t[0]));
+	float da = v3_dot(v3_sub(a, t[0]), n), db = v3_dot(v3_sub(b, t[0]), n);
+	if ((da < 0.0f) != (db < 0.0f)) {
+		d = fminf(d, point_triangle_distance(v3_lerp(a, b, da / (da - db)), t));
+	}
+	return d;
+}
+
+/* Whether triangle t has an edge no other triangle shares: the reach takes it for a wall. */
+static bool open_triangle(const plait_mesh_shape *shape, int t)
+{
+	for (int k = 0; k < 3; ++k) {
+		int a = shape->triangles[t][k], b = shape->triangles[t][(k + 1) % 3];
+		bool shared = false;
+		for (int u = 0; u < shape->triangle_count && !shared; ++u) {
+			for (int j = 0; j < 3 && u != t; ++j) {
+				int c = shape->triangles[u][j], d = shape->triangles[u][(j + 1) % 3];
+				shared = shared || (c == b && d == a) || (c == a && d == b);
+			}
+		}
+		if (!shared) {
+			return true;
+		}
+	}
+	return false;
+}
+
+static float reference_reach(const plait_mesh_shape *shape, vec3 a, vec3 b, vec3 normal, float budget,
+                             float range)
+{
+	sample *samples = malloc(sizeof *samples * (size_t)shape->triangle_count);
+	int count = 0;
+	for (int t = 0; t < shape->triangle_count; ++t) {
+		const int *tri = shape->triangles[t];
+		vec3 x[3] = {shape->positions[tri[0]], shape->positions[tri[1]], shape->positions[tri[2]]};
+		float distance = fmaxf(feature_distance(a, b, x) - 1e-6f, 0.0f);
+		if (distance <= range) {
+			float cosine = fmaxf(-1.0f, fminf(1.0f, v3_dot(shape->normals[t], normal)));
+			samples[count++] = (sample){distance, open_triangle(shape, t) ? 1.0f : acosf(cosine)};
+		}
+	}
+	qsort(samples, (size_t)count, sizeof *samples, by_distance);
+	float t = 0.0f, fall = 0.0f, steepest = 0.0f, reach = range - budget;
+	for (int k = 0;;) {
+		while (k < count && samples[k].distance - budget <= t) {
+			steepest = fmaxf(steepest, samples[k++].angle);
+		}
+		if (steepest >= 1.0f) {
+			reach = t;
+			break;
+		}
+		float next = k < count ? samples[k].distance - budget : range - budget;
+		float slope = tanf(steepest);
+		if (fall + slope * (next - t) >= budget) {
+			reach = t + (budget - fall) / slope;
+			break;
+		}
+		if (k >= count) {
+			reach = next;
+			break;
+		}
+		fall += slope * (next - t);
+		t = next;
+	}
+	free(samples);
+	return reach;
+}
+
+static vec3 unit(vec3 v)
+{
+	return v3_scale(v, 1.0f / v3_length(v));
+}
+
+/* The library's reaches against the definition (on closed or open meshes whose features all
+ * have a side): each edge's is its own, each corner's the shorter of its own and its edges'
+ * (a corner is kept whenever an edge of it is). */
+static void expect_reaches_as_defined(const test_mesh *m, float budget, float range)
+{
+	reaches s = measure(m, budget, range, 2);
+	const plait_mesh_shape *shape = &s.shape;
+	float tolerance = 1e-5f * range;
+	for (int t = 0; t < shape->triangle_count; t += 5) {
+		for (int k = 0; k < 3; ++k) {
+			int a = shape->triangles[t][k], b = shape->triangles[t][(k + 1) % 3];
+			int across = -1; /* the other face of the edge */
+			for (int u = 0; u < shape->triangle_count && across < 0; ++u) {
+				for (int j = 0; j < 3 && u != t; ++j) {
+					int c = shape->triangles[u][j], d = shape->triangles[u][(j + 1) % 3];
+					across = (c == b && d == a) ? u : across;
+				}
+			}
+			if (across < 0) {
+				continue; /* a border: no reach */
+			}
+			vec3 normal = unit(v3_add(shape->normals[t], shape->normals[across]));
+			float reference =
+			    reference_reach(shape, shape->positions[a], shape->positions[b], normal, budget, range);
+			cr_expect(fabsf(s.edge[3 * t + k] - reference) <= tolerance,
+			          "edge %d-%d reaches %g, by definition %g", a, b, (double)s.edge[3 * t + k],
+			          (double)reference);
+		}
+	}
+	for (int v = 0; v < m->vertex_count; v += 7) {
+		vec3 sum = {0.0f, 0.0f, 0.0f};
+		float edges = range - budget;
+		bool border = false;
+		for (int t = 0; t < shape->triangle_count; ++t) {
+			for (int k = 0; k < 3; ++k) {
+				int a = shape->triangles[t][k], b = shape->triangles[t][(k + 1) % 3];
+				sum = a == v ? v3_add(sum, shape->normals[t]) : sum;
+				if (a == v || b == v) {
+					edges = fminf(edges, s.edge[3 * t + k]);
+					border = border || s.edge[3 * t + k] < 0.0f;
+				}
+			}
+		}
+		if (border) {
+			continue;
+		}
+		float own =
+		    reference_reach(shape, shape->positions[v], shape->positions[v], unit(sum), budget, range);
+		float expected = fminf(own, edges);
+		cr_expect(fabsf(s.vertex[v] - expected) <= tolerance,
+		          "corner %d reaches %g: its own %g, its edges' %g", v, (double)s.vertex[v], (double)own,
+		          (double)edges);
+	}
+	reaches_free(&s);
+}
+
+Test(smooth_reach, edges_and_corners_reach_as_defined)
+{
+	test_mesh bumpy = sphere(36, 24, 0.5f, 0.03f);
+	expect_reaches_as_defined(&bumpy, 0.002f, 0.08f);
+	test_mesh_free(&bumpy);
+	test_mesh fold = folded_grid(24, 0.01f, 12, 40.0f);
+	expect_reaches_as_defined(&fold, 0.002f, 0.05f);
+	test_mesh_free(&fold);
+}
+
+/* On a sphere of radius R the faces within t turn by about t / R, so F(D) = (D^2 / 2 + M D) / R
+ * and the reach is sqrt(M^2 + 2 R M) - M. A UV sphere's flat faces turn in steps (by about
+ * h / R over faces of size h, some of it at 0): reaches fall short of that, never beyond. */
+Test(smooth_reach, a_sphere_reaches_no_farther_than_its_curvature_allows)
+{
+	float r = 0.5f, budget = 0.002f, range = 0.12f;
+	test_mesh m = sphere(96, 64, r, 0.0f);
+	reaches s = measure(&m, budget, range, 2);
+	float smooth = sqrtf(budget * budget + 2.0f * r * budget) - budget;
+	int near_equator = 0;
+	for (int v = 0; v < m.vertex_count; ++v) {
+		if (fabsf(m.x[v].y) < 0.1f) {
+			near_equator += 1;
+			cr_expect(s.vertex[v] > 0.4f * smooth && s.vertex[v] < smooth,
+			          "corner %d reaches %g m, a smooth sphere %g", v, (double)s.vertex[v], (double)smooth);
+		}
+	}
+	cr_assert_gt(near_equator, 100);
+	reaches_free(&s);
+	test_mesh_free(&m);
+}
+
+/* A flat sheet reaches as far as it is looked at; a right-angled fold has no reach along it,
+ * and corners farther from it than the range do not see it. */
+Test(smooth_reach, a_fold_ends_the_reach_of_what_sees_it)
+{
+	float cell = 0.01f, budget = 0.002f, range = 0.05f;
+	test_mesh m = folded_grid(40, cell, 20, 90.0f);
+	reaches s = measure(&m, budget, range, 1);
+	int n = 40;
+	for (int i = 1; i + 1 < n; ++i) {
+		for (int j = 1; j + 1 < n; ++j) {
+			float from_fold = fabsf((float)(i - 20)) * cell;
+			float from_border =
+			    fminf(fminf((float)i, (float)(n - 1 - i)), fminf((float)j, (float)(n - 1 - j))) * cell;
+			float reach = s.vertex[i * n + j];
+			if (from_fold > range + 0.01f && from_border > range + 0.02f) { /* open faces are walls */
+				cr_expect(fabsf(reach - (range - budget)) < 1e-5f * range,
+				          "corner (%d, %d), flat around, reaches %.9g", i, j, (double)reach);
+			}
+			if (i == 20) {
+				cr_expect(reach < budget, "corner (%d, %d) on the fold reaches %g", i, j, (double)reach);
+			}
+		}
+	}
+	reaches_free(&s);
+	test_mesh_free(&m);
+}
