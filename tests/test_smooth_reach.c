@@ -139,6 +139,15 @@ static void reaches_free(reaches *r)
 	free(r->edge);
 }
 
+/* The flat grid with vertex (20, 20) moved onto (20, 21): the faces with both have two vertices
+ * at one point (no normal, no closest point), and some round it turn over. */
+static test_mesh collapsed_grid(void)
+{
+	test_mesh m = folded_grid(40, 0.01f, 20, 0.0f);
+	m.x[20 * 40 + 20] = m.x[20 * 40 + 21];
+	return m;
+}
+
 Test(smooth_reach, the_same_on_any_number_of_workers)
 {
 	/* A rippled sphere: reaches of every length, and features that cost unevenly. */
@@ -158,6 +167,41 @@ Test(smooth_reach, the_same_on_any_number_of_workers)
 		reaches_free(&many);
 	}
 	reaches_free(&one);
+	test_mesh_free(&m);
+	test_mesh collapsed = collapsed_grid();
+	reaches alone = measure(&collapsed, 0.002f, 0.05f, 1), shared = measure(&collapsed, 0.002f, 0.05f, 8);
+	cr_expect(memcmp(alone.vertex, shared.vertex, sizeof(float) * (size_t)collapsed.vertex_count) == 0);
+	cr_expect(memcmp(alone.edge, shared.edge, sizeof(float) * 3 * (size_t)alone.shape.triangle_count) == 0);
+	reaches_free(&alone);
+	reaches_free(&shared);
+	test_mesh_free(&collapsed);
+}
+
+/* Faces with two vertices at one point are walls where they are: corners round them reach up to
+ * them, not nowhere (a closest point of 0 / 0 once made them walls at 0 for every corner whose
+ * search met them). */
+Test(smooth_reach, a_collapsed_face_is_a_wall_where_it_is)
+{
+	float budget = 0.002f, range = 0.08f;
+	test_mesh m = collapsed_grid();
+	reaches s = measure(&m, budget, range, 1);
+	int looked = 0;
+	for (int i = 8; i <= 32; ++i) {
+		for (int j = 8; j <= 32; ++j) {
+			/* Every face that moved lies within 0.03 of the moved vertex's old place. */
+			float rho = 0.01f * sqrtf((float)((i - 20) * (i - 20) + (j - 20) * (j - 20)));
+			if (rho < 0.04f || rho > range) {
+				continue;
+			}
+			float reach = s.vertex[i * 40 + j];
+			cr_expect(reach >= rho - 0.03f - budget - 1e-5f && reach <= rho + 0.01f,
+			          "corner (%d, %d), %g from the collapsed faces' middle, reaches %g", i, j, (double)rho,
+			          (double)reach);
+			looked += 1;
+		}
+	}
+	cr_assert_gt(looked, 50);
+	reaches_free(&s);
 	test_mesh_free(&m);
 }
 

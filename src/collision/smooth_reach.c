@@ -122,14 +122,19 @@ static void sample_face(int triangle, void *context)
 	}
 	const int *tri = q->shape->triangles[triangle];
 	vec3 t[3] = {q->shape->positions[tri[0]], q->shape->positions[tri[1]], q->shape->positions[tri[2]]};
-	/* A face with a vertex of the feature is at 0 (as measured: a corner's closest point is
-	 * itself); the others less a rounding allowance: the distance must not be overstated. */
+	/* A face with a vertex of the feature is at 0 (what the measure gives, but for rounding on
+	 * needles: never more); the others less a rounding allowance, the distance must not be
+	 * overstated. A face with two vertices at one point has no closest point (0 / 0): its
+	 * ball's bound stands for its distance. */
 	bool touches = false;
 	for (int k = 0; k < 3; ++k) {
 		touches = touches || tri[k] == q->vertex_a || tri[k] == q->vertex_b;
 	}
-	float distance =
-	    touches ? 0.0f : plait_maxf(feature_triangle_distance(q->a, q->b, q->corner, t) - 1e-6f, 0.0f);
+	float distance = 0.0f;
+	if (!touches) {
+		float measured = feature_triangle_distance(q->a, q->b, q->corner, t);
+		distance = plait_maxf((isnan(measured) ? beyond : measured) - 1e-6f, 0.0f);
+	}
 	if (distance > q->range) {
 		return;
 	}
@@ -179,15 +184,18 @@ static float reach_within(feature_query *q, float budget, float range)
 
 /* The same over q->range, sampled in widening rounds: on a sharp mesh most reaches end well
  * inside it. A reach that ends inside a round's range is the whole range's (the faces beyond
- * come after it), so the rounds change only the cost: where the last feature took them all (a
- * smooth mesh, its reaches long), the next starts with the whole range. */
+ * come after it), so the rounds change only the cost: where the last feature's reach went
+ * past a quarter of the range (a smooth mesh, its reaches long), the next starts with the whole
+ * range. Chunks of features start afresh at fixed features (SHARE_BLOCK), so that no result can
+ * depend on how the features were cut for the workers. */
 static float smooth_reach(feature_query *q, float budget)
 {
+	float quarter = 0.25f * (q->range - budget);
 	float range = budget + q->first_share * (q->range - budget);
 	for (;;) {
 		float reach = reach_within(q, budget, range);
 		if (reach < 0.999f * (range - budget) || range >= q->range) {
-			q->first_share = range >= q->range && range > budget + 0.25f * (q->range - budget) ? 1.0f : 0.25f;
+			q->first_share = reach >= 0.999f * quarter ? 1.0f : 0.25f;
 			return reach;
 		}
 		range = plait_minf(q->range, budget + 2.0f * (range - budget));
@@ -213,6 +221,9 @@ static vec3 reference_normal(vec3 sum, int count)
 	float length = v3_length(sum);
 	return length > 0.5f * (float)count ? v3_scale(sum, 1.0f / length) : v3(0.0f, 0.0f, 0.0f);
 }
+
+/* Features measured in a row from a fresh start (smooth_reach); chunks hold whole blocks. */
+#define SHARE_BLOCK 64
 
 /* Features are measured side by side on the workers, a chunk each with its own samples (each
  * feature's reach depends only on the shape, so the results are the same on any number). */
@@ -244,6 +255,7 @@ static void edge_reaches(void *context, int begin, int end)
 	const plait_mesh_shape *shape = q.shape;
 	float range = q.range;
 	for (int r = begin; r < end; ++r) {
+		q.first_share = r % SHARE_BLOCK == 0 ? 0.25f : q.first_share;
 		const plait_triangle_edge *edge = &job->edges[job->runs[r]];
 		q.a = shape->positions[edge[0].low];
 		q.b = shape->positions[edge[0].high];
@@ -264,6 +276,7 @@ static void corner_reaches(void *context, int begin, int end)
 	const plait_mesh_shape *shape = q.shape;
 	float range = q.range;
 	for (int v = begin; v < end; ++v) {
+		q.first_share = v % SHARE_BLOCK == 0 ? 0.25f : q.first_share;
 		if (job->star[v] == 0 || !(job->vertex_reach[v] > 0.0f)) {
 			continue;
 		}
@@ -286,8 +299,18 @@ static void run_chunks(plait_parallel *parallel, plait_range_fn *fn, void *conte
 	}
 }
 
-/* Chunks per worker: enough for an even share when features cost unevenly. */
+/* Chunks per worker: enough for an even share when features cost unevenly; at most
+ * MOST_CHUNKS, each with room for a sample of every triangle. */
 #define CHUNKS_PER_WORKER 4
+#define MOST_CHUNKS 64
+
+/* Features [0, count) cut into at most `chunks` chunks of whole blocks. */
+static int block_grain(int count, int chunks)
+{
+	int per_chunk = (count + chunks - 1) / chunks;
+	int blocks = (per_chunk + SHARE_BLOCK - 1) / SHARE_BLOCK;
+	return (blocks > 0 ? blocks : 1) * SHARE_BLOCK;
+}
 
 bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *a,
                                plait_parallel *parallel, float budget, float range, float *vertex_reach_out,
@@ -295,6 +318,7 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 {
 	int nt = shape->triangle_count, nv = shape->vertex_count;
 	int chunks = CHUNKS_PER_WORKER * (parallel != NULL ? parallel->worker_count : 1);
+	chunks = chunks < MOST_CHUNKS ? chunks : MOST_CHUNKS;
 	plait_triangle_edge *edges = plait_alloc(a, sizeof *edges * (size_t)(3 * nt + 1));
 	int *edge_of = plait_alloc(a, sizeof(int) * (size_t)(3 * nt + 1)); /* (t, k) -> first key of its run */
 	int *runs = plait_alloc(a, sizeof(int) * (size_t)(3 * nt + 1));
@@ -371,7 +395,7 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 		                 .vertex_reach = vertex_reach,
 		                 .samples = samples};
 		/* Edges first: a corner is kept whenever an edge of it is. */
-		job.grain = (run_count + chunks - 1) / chunks > 0 ? (run_count + chunks - 1) / chunks : 1;
+		job.grain = block_grain(run_count, chunks);
 		run_chunks(parallel, edge_reaches, &job, run_count, job.grain);
 		for (int start = 0; start < 3 * nt;) {
 			int end = start + 1;
@@ -383,7 +407,7 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 			vertex_reach[edges[start].high] = plait_minf(vertex_reach[edges[start].high], edge_reach[start]);
 			start = end;
 		}
-		job.grain = (nv + chunks - 1) / chunks > 0 ? (nv + chunks - 1) / chunks : 1;
+		job.grain = block_grain(nv, chunks);
 		run_chunks(parallel, corner_reaches, &job, nv, job.grain);
 		memcpy(vertex_reach_out, vertex_reach, sizeof(float) * (size_t)nv);
 		for (int t = 0; t < nt; ++t) {
