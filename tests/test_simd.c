@@ -230,11 +230,11 @@ static void check_colouring(const int *vertices, int arity, int count, int parti
 	free(owner);
 }
 
-Test(simd, runs_and_regions_share_no_particle)
+/* A grid's edges, diagonals and skip-one pairs, and random pairs with a hub vertex that
+ * takes part in more constraints than there are colours. */
+static void check_grid_colouring(int n)
 {
-	/* A grid's edges, diagonals and skip-one pairs, and random pairs with a hub vertex that
-	 * takes part in more constraints than there are colours. */
-	int n = 60, count = 0;
+	int count = 0;
 	int(*pairs)[2] = malloc(sizeof *pairs * (size_t)(8 * n * n + 200));
 	for (int j = 0; j < n; ++j) {
 		for (int i = 0; i < n; ++i) {
@@ -258,6 +258,13 @@ Test(simd, runs_and_regions_share_no_particle)
 	}
 	check_colouring(&pairs[0][0], 2, count, n * n);
 	free(pairs);
+}
+
+Test(simd, runs_and_regions_share_no_particle)
+{
+	check_grid_colouring(60);
+	/* 240,000 constraints: more regions than PLAIT_MAX_REGIONS, so larger regions and slabs. */
+	check_grid_colouring(200);
 }
 
 /* Two cloths with everything on (tethers, bend as distances and as dihedral angles,

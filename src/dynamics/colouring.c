@@ -123,11 +123,17 @@ bool plait_colour_constraints(const plait_allocator *allocator, const int *verti
 		for (int c = 0; c < count; ++c) {
 			list[next[region_of[c]]++] = c;
 		}
+		/* Where the regions are capped (PLAIT_MAX_REGIONS), they hold more than about
+		 * PLAIT_REGION_SIZE constraints and their slabs grow with them, to the same share. */
+		int region_slab = PLAIT_SLAB_SIZE;
+		if (regions == PLAIT_MAX_REGIONS && count / regions > PLAIT_REGION_SIZE) {
+			region_slab = (int)((int64_t)PLAIT_SLAB_SIZE * (count / regions) / PLAIT_REGION_SIZE);
+		}
 		colouring_state state = {vertices, arity, used, colour, order, run_start, 0, 0};
 		for (int r = 0; r <= regions; ++r) {
 			region_start[r] = state.runs;
 			/* The boundary is small and scattered: coloured whole, for long runs. */
-			int slab = r < regions ? PLAIT_SLAB_SIZE : count;
+			int slab = r < regions ? region_slab : count;
 			colour_list(&state, list + bucket_first[r], bucket_size[r], slab);
 		}
 		run_start[state.runs] = count;

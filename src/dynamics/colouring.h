@@ -10,8 +10,11 @@
  * rows); a constraint whose particles are all in one region belongs to it, the others to the
  * boundary. Regions share no particle, so they are swept at the same time, one thread each,
  * each in its own order; then the boundary is swept. Inside a region, constraints are cut in
- * their order into slabs of PLAIT_SLAB_SIZE and each slab is coloured: a colour of a slab is a
- * run of constraints that share no particle, projected together in SIMD lanes.
+ * their order into slabs of PLAIT_SLAB_SIZE (more where the regions, capped at
+ * PLAIT_MAX_REGIONS, hold more than PLAIT_REGION_SIZE: the same share of a region) and each
+ * slab is coloured: a colour of a slab is a run of constraints that share no particle,
+ * projected together in SIMD lanes. (Slabs of 512 in the 8,000-constraint regions of a
+ * 512 x 512 cloth made it 7% slower, with no better strain.)
  *
  * How the block is cut depends on the block alone, never on the thread count or the instruction
  * set, and constraints of a run or of different regions commute: the output is bit-identical
