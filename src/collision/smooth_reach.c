@@ -350,6 +350,10 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 				star[i] += 1;
 			}
 		}
+		for (int v = 0; v < nv; ++v) {
+			vertex_reach[v] = range - budget;
+			star_cos[v] = 1.0f;
+		}
 		plait_sort_triangle_edges(edges, 3 * nt);
 		int run_count = 0;
 		for (int start = 0; start < 3 * nt;) {
@@ -362,15 +366,15 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 				edge_of[3 * edges[k].triangle + edges[k].corner] = start;
 				open[edges[k].triangle] = open[edges[k].triangle] || end - start != 2;
 			}
-			edge_reach[start] = -1.0f; /* open or shared by more than two: no reach */
 			if (end - start == 2) {
 				runs[run_count++] = start;
+			} else {
+				/* Open or shared by more than two: no reach, nor for its ends. */
+				edge_reach[start] = -1.0f;
+				vertex_reach[edges[start].low] = -1.0f;
+				vertex_reach[edges[start].high] = -1.0f;
 			}
 			start = end;
-		}
-		for (int v = 0; v < nv; ++v) {
-			vertex_reach[v] = range - budget;
-			star_cos[v] = 1.0f;
 		}
 		for (int t = 0; t < nt; ++t) {
 			for (int k = 0; k < 3; ++k) {
@@ -397,15 +401,10 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 		/* Edges first: a corner is kept whenever an edge of it is. */
 		job.grain = block_grain(run_count, chunks);
 		run_chunks(parallel, edge_reaches, &job, run_count, job.grain);
-		for (int start = 0; start < 3 * nt;) {
-			int end = start + 1;
-			while (end < 3 * nt && edges[end].low == edges[start].low &&
-			       edges[end].high == edges[start].high) {
-				++end;
-			}
-			vertex_reach[edges[start].low] = plait_minf(vertex_reach[edges[start].low], edge_reach[start]);
-			vertex_reach[edges[start].high] = plait_minf(vertex_reach[edges[start].high], edge_reach[start]);
-			start = end;
+		for (int r = 0; r < run_count; ++r) {
+			const plait_triangle_edge *edge = &edges[runs[r]];
+			vertex_reach[edge->low] = plait_minf(vertex_reach[edge->low], edge_reach[runs[r]]);
+			vertex_reach[edge->high] = plait_minf(vertex_reach[edge->high], edge_reach[runs[r]]);
 		}
 		job.grain = block_grain(nv, chunks);
 		run_chunks(parallel, corner_reaches, &job, nv, job.grain);
