@@ -20,6 +20,7 @@
  *                      [--self-flag full|vertex_face|vertex] (of the self-colliding cloths)
  *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
  *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
+ *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
  *                      [--sphere-slices S] (hang-self: the sphere mesh's slices and stacks, 50)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *                      [--per-frame] (a line per frame: its ms, collision ms and counters)
@@ -178,6 +179,8 @@ int main(int argc, char **argv)
 			options.thickness_per_edge = (float)atof(argv[++a]);
 		} else if (strcmp(argv[a], "--stiff") == 0) {
 			options.stiff = true;
+		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
+			options.stiff_substeps = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--sphere-slices") == 0 && a + 1 < argc) {
 			options.sphere_slices = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--verbose") == 0) {
@@ -193,7 +196,7 @@ int main(int argc, char **argv)
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
 				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--stiff] [--sphere-slices S] [--verbose] [--per-frame]\n"
+				        "[--stiff] [--substeps S] [--sphere-slices S] [--verbose] [--per-frame]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}

@@ -309,7 +309,8 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 			cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
 			cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
 			cloth.bend_model = PLAIT_BEND_DISTANCE;
-			cloth.iterations = cloth.shear_iterations = cloth.bend_iterations = 6;
+			int sweeps = scene->options.stiff_substeps > 0 ? scene->options.stiff_substeps : 6;
+			cloth.iterations = cloth.shear_iterations = cloth.bend_iterations = sweeps;
 			cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
 		}
 		cloth.surface.thickness = scene->options.thickness_per_edge > 0.0f
@@ -334,7 +335,7 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 collide_scene_options collide_scene_default_options(void)
 {
-	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false, 0};
+	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false, 0, 0};
 }
 
 bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,
@@ -346,7 +347,7 @@ bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, in
 	scene->options = *options;
 	plait_world_def def = base != NULL ? *base : plait_default_world_def();
 	if (kind == SCENE_HANG_SELF && options->stiff) {
-		def.substeps = 6;
+		def.substeps = options->stiff_substeps > 0 ? options->stiff_substeps : 6;
 	}
 	def.fps = 60.0f;
 	def.air_density = 0.0f;

@@ -32,6 +32,9 @@ typedef struct collide_scene_options {
 	bool stiff;
 	/* hang-self: the sphere mesh's slices and stacks (0: 50, about 4,900 triangles) */
 	int sphere_slices;
+	/* hang-self with stiff: substeps a frame, one sweep of each constraint kind in each (0: 6).
+	 * A finer cloth needs more to hold together as well as a coarser one (bench_hang). */
+	int stiff_substeps;
 } collide_scene_options;
 
 typedef struct collide_scene {
