@@ -282,6 +282,31 @@ void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 uppe
 	}
 }
 
+bool plait_mesh_shape_any(const plait_mesh_shape *shape, vec3 lower, vec3 upper)
+{
+	int stack[64], depth = 0;
+	stack[depth++] = 0;
+	while (depth > 0) {
+		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
+		if (!boxes_overlap(n->lower, n->upper, lower, upper)) {
+			continue;
+		}
+		if (n->count > 0) {
+			for (int k = n->first; k < n->first + n->count; ++k) {
+				vec3 tl, tu;
+				triangle_bounds(shape, shape->triangle_order[k], &tl, &tu);
+				if (boxes_overlap(tl, tu, lower, upper)) {
+					return true;
+				}
+			}
+		} else if (depth + 2 <= 64) {
+			stack[depth++] = n->first + 1;
+			stack[depth++] = n->first;
+		}
+	}
+	return false;
+}
+
 static vec3 weighted(vec3 a, vec3 b, vec3 c, float wa, float wb, float wc, float weights[3])
 {
 	if (weights != NULL) {

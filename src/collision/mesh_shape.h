@@ -59,6 +59,9 @@ void plait_mesh_shape_deform(plait_mesh_shape *shape, const vec3 *from, const ve
 typedef void plait_triangle_visitor(int triangle, void *context);
 void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
                             plait_triangle_visitor *visit, void *context);
+/* Whether any triangle's own box (over its sweep when deforming) overlaps [lower, upper]: the
+ * test plait_mesh_shape_visit makes, stopping at the first. */
+bool plait_mesh_shape_any(const plait_mesh_shape *shape, vec3 lower, vec3 upper);
 
 /* The point of triangle (a, b, c) closest to p; *region is 0 inside the face, 1 on an edge or
  * corner; weights (may be NULL) receive its barycentric coordinates. */

@@ -340,20 +340,6 @@ static void visit_proximity(int t, void *context)
  * contact. Every candidate triangle is visited, however many the path overlaps. Returns true
  * when the particle was moved; *p1 is updated in shape space and *surface_motion receives how
  * far the touched surface point moved over the substep (zero for a rigid mesh). */
-static void note_triangle(int t, void *context)
-{
-	(void)t;
-	*(bool *)context = true;
-}
-
-/* Whether any triangle's box of the mesh overlaps [lower, upper]. */
-static bool any_triangle_near(const plait_mesh_shape *mesh, vec3 lower, vec3 upper)
-{
-	bool found = false;
-	plait_mesh_shape_visit(mesh, lower, upper, true, note_triangle, &found);
-	return found;
-}
-
 static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 *p1, float radius,
                                     float friction, bool thorough, vec3 *contact_normal, vec3 *surface_motion,
                                     vec3 *measured_at, float *measured)
@@ -402,7 +388,7 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 	}
 	/* A particle with no triangle within its radius is not touching; it could only be deep
 	 * inside, which a thorough pass (the first substep of each frame) looks for. */
-	bool near = pass.moved || any_triangle_near(mesh, v3_sub(pass.p1, grow), v3_add(pass.p1, grow));
+	bool near = pass.moved || plait_mesh_shape_any(mesh, v3_sub(pass.p1, grow), v3_add(pass.p1, grow));
 	if (mesh->closed && (near || thorough)) {
 		/* Trapped check (seed 000 §4.4): whatever side the particle came from, it must end
 		 * outside a closed mesh, by the radius. The signed distance settles inside and

@@ -65,6 +65,8 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->x_gather);
 	plait_free(a, mc->sweep_end);
 	plait_free(a, mc->sweep_motion);
+	plait_free(a, mc->path_lower);
+	plait_free(a, mc->path_upper);
 	plait_free(a, mc->motion);
 	plait_free(a, mc->around);
 	plait_free(a, mc->guard);

@@ -302,6 +302,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->x_gather);
 	plait_free(a, mc->sweep_end);
 	plait_free(a, mc->sweep_motion);
+	plait_free(a, mc->path_lower);
+	plait_free(a, mc->path_upper);
 	plait_free(a, mc->motion);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
@@ -310,6 +312,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->x_gather = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->sweep_end = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->sweep_motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->path_lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->path_upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->object_of = plait_alloc_zero(a, (size_t)count, sizeof(int));
@@ -318,8 +322,9 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->touched = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->members = plait_alloc_zero(a, (size_t)count, sizeof *mc->members);
 	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
-	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->motion == NULL || mc->guard == NULL ||
-	    mc->object_of == NULL || mc->around == NULL) {
+	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->path_lower == NULL ||
+	    mc->path_upper == NULL || mc->motion == NULL || mc->guard == NULL || mc->object_of == NULL ||
+	    mc->around == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

@@ -238,6 +238,9 @@ typedef struct plait_mesh_contacts {
 	bool cull_flat;
 	bool skip_smooth; /* traversals pass over smooth node pairs (plait_mesh_contacts_smooth_skip) */
 	vec3 *sweep_end, *sweep_motion;
+	/* Per particle (scratch of fit_boxes): the box of its path relative to its object's mean
+	 * motion over the list's window, found once rather than once for each of its elements. */
+	vec3 *path_lower, *path_upper;
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
 	long listings;                      /* gathers since the stage was made */
 	int *object_of;                     /* per particle: its collision object, or -1 */

@@ -83,16 +83,10 @@ static void fit_box_range(void *context, int begin, int end)
 			}
 			const plait_material *m = &sim->materials[el->material];
 			float reach = radius * (m->self_collide ? plait_maxf(1.0f, m->self_width_scale) : 1.0f);
-			/* Swept along its vertices' paths relative to their object, from the gather's
-			 * substep's start to the end of the substeps the list serves (its paths as the
-			 * gather took them, at a gather where it is now). */
-			int o = mc->object_of[el->v[0]];
-			vec3 mean = o >= 0 ? mc->shift[o] : v3(0.0f, 0.0f, 0.0f); /* minus the object's */
+			/* Swept along its vertices' paths relative to their object (path_box_range). */
 			for (int k = 0; k < el->size; ++k) {
-				vec3 x = mc->x_gather[el->v[k]], w = v3_add(mc->motion[el->v[k]], mean);
-				vec3 back = v3_sub(x, w), on = v3_mul_add(x, (float)mc->list_serves, w);
-				lower = v3_min(lower, v3_min(x, v3_min(back, on)));
-				upper = v3_max(upper, v3_max(x, v3_max(back, on)));
+				lower = v3_min(lower, mc->path_lower[el->v[k]]);
+				upper = v3_max(upper, mc->path_upper[el->v[k]]);
 			}
 			g += LIST_SCALE * reach + guard + FAILSAFE_DISTANCE;
 			mc->element_reach[e] = radius;
@@ -102,6 +96,26 @@ static void fit_box_range(void *context, int begin, int end)
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
 	}
 }
+
+/* The box of each particle's path in [begin, end), relative to its object's mean motion, from
+ * the gather's substep's start to the end of the substeps the list serves (its path as the
+ * gather took it, at a gather where it is now): each element's box holds its vertices'. */
+static void path_box_range(void *context, int begin, int end)
+{
+	const box_job *job = context;
+	plait_mesh_contacts *mc = job->mc;
+	float serves = (float)mc->list_serves;
+	for (int i = begin; i < end; ++i) {
+		int o = mc->object_of[i];
+		vec3 mean = o >= 0 ? mc->shift[o] : v3(0.0f, 0.0f, 0.0f); /* minus the object's */
+		vec3 x = mc->x_gather[i], w = v3_add(mc->motion[i], mean);
+		vec3 back = v3_sub(x, w), on = v3_mul_add(x, serves, w);
+		mc->path_lower[i] = v3_min(x, v3_min(back, on));
+		mc->path_upper[i] = v3_max(x, v3_max(back, on));
+	}
+}
+
+#define PATH_BOX_GRAIN 4096
 
 /* Trees are refitted on the workers subtree by subtree, CUT_LEVELS below their roots, then
  * above those on the calling thread. */
@@ -126,6 +140,9 @@ static void refit_subtrees(void *context, int begin, int end)
 static void fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool paths, float margin, bool measure_edges)
 {
 	box_job job = {sim, mc, paths, margin};
+	if (!paths) {
+		plait_parallel_for(&sim->parallel, path_box_range, &job, 0, sim->particles.count, PATH_BOX_GRAIN);
+	}
 	plait_parallel_for(&sim->parallel, fit_box_range, &job, 0, mc->element_count, FIT_BOX_GRAIN);
 	if (mc->features != NULL && measure_edges) {
 		plait_mesh_contacts_measure_cloth_edges(sim, mc, paths ? 1.0f : CLOTH_EDGE_SLACK);

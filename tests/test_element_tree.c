@@ -1,0 +1,172 @@
+/* collision/element_tree.h and the mesh shape's box queries: every pair of boxes that meet is
+ * reported once, and nothing else, whatever the leaves hold. A pair missed here is a contact the
+ * gather never lists, so the traversals are compared with a test of every pair, on boxes that
+ * touch exactly, lie a margin apart, or are empty lanes' neighbours (leaves of 1 to 4). */
+#include <criterion/criterion.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "collision/element_tree.h"
+#include "collision/mesh_shape.h"
+#include "test_support.h"
+
+static const plait_allocator heap = {NULL, NULL, NULL};
+
+/* A small deterministic generator (the test must not depend on the libc's rand). */
+static float next_unit(unsigned *state)
+{
+	*state = *state * 1664525u + 1013904223u;
+	return (float)(*state >> 8) / (float)(1u << 24);
+}
+
+/* `count` boxes scattered in a cube of side `spread`, sizes up to `size`; coordinates on a grid
+ * of 1/64 so that many boxes touch exactly (lower of one == upper of another). */
+static void random_boxes(unsigned seed, int count, float spread, float size, vec3 *lower, vec3 *upper,
+                         vec3 *centre)
+{
+	unsigned state = seed;
+	for (int e = 0; e < count; ++e) {
+		float c[3], h[3];
+		for (int k = 0; k < 3; ++k) {
+			c[k] = floorf(next_unit(&state) * spread * 64.0f) / 64.0f;
+			h[k] = floorf(next_unit(&state) * size * 64.0f) / 64.0f;
+		}
+		lower[e] = v3(c[0] - h[0], c[1] - h[1], c[2] - h[2]);
+		upper[e] = v3(c[0] + h[0], c[1] + h[1], c[2] + h[2]);
+		centre[e] = v3(c[0], c[1], c[2]);
+	}
+}
+
+static bool meet(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
+{
+	return la.x <= ub.x + margin && lb.x <= ua.x + margin && la.y <= ub.y + margin && lb.y <= ua.y + margin &&
+	       la.z <= ub.z + margin && lb.z <= ua.z + margin;
+}
+
+typedef struct pair_record {
+	int count_a, count_b;
+	unsigned char *seen; /* count_a x count_b, how many times each pair was reported */
+	int reported;
+} pair_record;
+
+static void record(int a, int b, void *context)
+{
+	pair_record *r = context;
+	cr_assert(a >= 0 && a < r->count_a && b >= 0 && b < r->count_b, "pair (%d, %d) out of range", a, b);
+	r->seen[a * r->count_b + b] += 1;
+	r->reported += 1;
+}
+
+Test(element_tree, self_pairs_are_every_pair_that_meets_once)
+{
+	for (int count = 1; count <= 300; count += count < 12 ? 1 : 37) {
+		vec3 *lower = malloc(sizeof *lower * (size_t)count), *upper = malloc(sizeof *upper * (size_t)count);
+		vec3 *centre = malloc(sizeof *centre * (size_t)count);
+		random_boxes(7u + (unsigned)count, count, 1.0f, 0.08f, lower, upper, centre);
+		plait_element_tree tree = {0};
+		cr_assert(plait_element_tree_build(&tree, &heap, centre, count));
+		plait_element_tree_refit(&tree, lower, upper);
+		pair_record r = {count, count, calloc((size_t)count * (size_t)count, 1), 0};
+		plait_element_tree_pairs(&tree, lower, upper, record, &r);
+		int expected = 0;
+		for (int a = 0; a < count; ++a) {
+			for (int b = a + 1; b < count; ++b) {
+				bool should = meet(lower[a], upper[a], lower[b], upper[b], 0.0f);
+				int times = r.seen[a * count + b] + r.seen[b * count + a];
+				cr_assert_eq(times, should ? 1 : 0, "%d boxes: pair (%d, %d) reported %d times, meets: %d",
+				             count, a, b, times, should);
+				expected += should;
+			}
+			cr_assert_eq(r.seen[a * count + a], 0, "element %d paired with itself", a);
+		}
+		cr_assert_eq(r.reported, expected);
+		free(r.seen);
+		plait_element_tree_destroy(&tree, &heap);
+		free(lower);
+		free(upper);
+		free(centre);
+	}
+}
+
+Test(element_tree, pairs_between_trees_within_the_margin)
+{
+	const int count_a = 97, count_b = 61;
+	vec3 la[97], ua[97], ca[97], lb[61], ub[61], cb[61];
+	random_boxes(11u, count_a, 1.0f, 0.05f, la, ua, ca);
+	random_boxes(23u, count_b, 1.0f, 0.05f, lb, ub, cb);
+	plait_element_tree a = {0}, b = {0};
+	cr_assert(plait_element_tree_build(&a, &heap, ca, count_a));
+	cr_assert(plait_element_tree_build(&b, &heap, cb, count_b));
+	plait_element_tree_refit(&a, la, ua);
+	plait_element_tree_refit(&b, lb, ub);
+	const float margins[] = {0.0f, 1.0f / 64.0f, 0.1f};
+	for (int m = 0; m < 3; ++m) {
+		pair_record r = {count_a, count_b, calloc((size_t)count_a * (size_t)count_b, 1), 0};
+		plait_element_tree_pairs_between(&a, la, ua, &b, lb, ub, margins[m], NULL, record, &r);
+		for (int i = 0; i < count_a; ++i) {
+			for (int j = 0; j < count_b; ++j) {
+				bool should = meet(la[i], ua[i], lb[j], ub[j], margins[m]);
+				cr_assert_eq(r.seen[i * count_b + j], should ? 1 : 0,
+				             "margin %g: pair (%d, %d) reported %d times", (double)margins[m], i, j,
+				             r.seen[i * count_b + j]);
+			}
+		}
+		free(r.seen);
+	}
+	plait_element_tree_destroy(&a, &heap);
+	plait_element_tree_destroy(&b, &heap);
+}
+
+typedef struct visit_count {
+	int visited;
+} visit_count;
+
+static void count_triangle(int t, void *context)
+{
+	(void)t;
+	((visit_count *)context)->visited += 1;
+}
+
+Test(mesh_shape, any_is_whether_the_visit_finds_a_triangle)
+{
+	/* A grid of 12 x 12 quads over [0, 1]^2 at z = 0, bent up along x so that boxes differ. */
+	enum { N = 13 };
+	plait_vec3 positions[N * N];
+	int face_sizes[(N - 1) * (N - 1)], faces[4 * (N - 1) * (N - 1)];
+	for (int j = 0; j < N; ++j) {
+		for (int i = 0; i < N; ++i) {
+			float x = (float)i / (float)(N - 1), y = (float)j / (float)(N - 1);
+			positions[j * N + i] = (plait_vec3){x, y, 0.5f * x * x};
+		}
+	}
+	for (int j = 0; j + 1 < N; ++j) {
+		for (int i = 0; i + 1 < N; ++i) {
+			int f = j * (N - 1) + i;
+			face_sizes[f] = 4;
+			faces[4 * f + 0] = j * N + i;
+			faces[4 * f + 1] = j * N + i + 1;
+			faces[4 * f + 2] = (j + 1) * N + i + 1;
+			faces[4 * f + 3] = (j + 1) * N + i;
+		}
+	}
+	plait_mesh_def def = {positions, N * N, face_sizes, (N - 1) * (N - 1), faces};
+	plait_mesh_shape shape = {0};
+	plait_error error = {0};
+	cr_assert_eq(plait_mesh_shape_build(&shape, &heap, &def, &error), PLAIT_OK, "%s", error.message);
+	unsigned state = 5u;
+	int found = 0;
+	for (int k = 0; k < 2000; ++k) {
+		float x = 1.4f * next_unit(&state) - 0.2f, y = 1.4f * next_unit(&state) - 0.2f;
+		vec3 c = v3(x, y, 0.5f * x * x + 0.3f * (next_unit(&state) - 0.5f)); /* about the surface */
+		float h = 0.06f * next_unit(&state);
+		vec3 lower = v3_sub(c, v3(h, h, h)), upper = v3_add(c, v3(h, h, h));
+		visit_count v = {0};
+		plait_mesh_shape_visit(&shape, lower, upper, true, count_triangle, &v);
+		cr_assert_eq(plait_mesh_shape_any(&shape, lower, upper), v.visited > 0,
+		             "box %d: any says %d, the visit met %d triangles", k, !(v.visited > 0), v.visited);
+		found += v.visited > 0;
+	}
+	cr_assert(found > 200 && found < 1800, "the boxes should both meet and miss the mesh (%d met)", found);
+	plait_mesh_shape_destroy(&shape, &heap);
+}
