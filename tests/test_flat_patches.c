@@ -427,3 +427,44 @@ Test(flat_patches, fitting_by_subtrees_gives_the_whole_trees_cones_and_boxes)
 	free(motion);
 	mesh_free(&m);
 }
+
+/* Leaf cones on paths without guards (the gather's) take a four-lane path; with guards of zero
+ * the general one. Their normals and so their axes must agree to the bit, and the guardless
+ * cone's rounding allowance (half the squared edges) is never less than the general one's (the
+ * edges' product), so its angles hold the general ones, by little. */
+Test(flat_patches, leaf_cones_without_guards_agree_with_the_general_fit)
+{
+	patch_mesh m = grid(21, 17);
+	vec3 *motion = malloc(sizeof *motion * (size_t)m.vertex_count);
+	float *zero = calloc((size_t)m.vertex_count, sizeof *zero);
+	for (int i = 0; i < m.vertex_count; ++i) {
+		vec3 x = m.x[i];
+		m.x[i].y = 0.08f * sinf(11.0f * x.x) * cosf(5.0f * x.z);
+		motion[i] = v3(0.004f * sinf(23.0f * x.z), 0.006f * cosf(13.0f * x.x), -0.002f);
+	}
+	int nodes = m.tree.node_count, leaves = 0;
+	plait_patch_paths fast = {m.x, motion, NULL, 1.0f, 2.0f}, general = {m.x, motion, zero, 1.0f, 2.0f};
+	plait_flat_patches_fit(&m.patches, &m.tree, &fast);
+	plait_cone *cones = malloc(sizeof *cones * (size_t)nodes);
+	memcpy(cones, m.patches.patch_cone, sizeof *cones * (size_t)nodes);
+	plait_flat_patches_fit(&m.patches, &m.tree, &general);
+	for (int n = 0; n < nodes; ++n) {
+		if (m.tree.nodes[n].count == 0) {
+			continue;
+		}
+		leaves += 1;
+		plait_cone a = cones[n], b = m.patches.patch_cone[n];
+		cr_assert(a.angle < 1.0f && b.angle < 1.0f, "leaf %d: cones %g and %g", n, (double)a.angle,
+		          (double)b.angle);
+		cr_expect(memcmp(&a.axis, &b.axis, sizeof a.axis) == 0, "leaf %d: axes (%g %g %g) and (%g %g %g)", n,
+		          (double)a.axis.x, (double)a.axis.y, (double)a.axis.z, (double)b.axis.x, (double)b.axis.y,
+		          (double)b.axis.z);
+		cr_expect(a.angle >= b.angle && a.angle <= b.angle + 1e-4f, "leaf %d: angles %.9g and %.9g", n,
+		          (double)a.angle, (double)b.angle);
+	}
+	cr_assert_gt(leaves, 100);
+	free(cones);
+	free(zero);
+	free(motion);
+	mesh_free(&m);
+}

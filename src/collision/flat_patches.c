@@ -2,6 +2,9 @@
 
 #include <math.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "topology/topology.h"
 
@@ -590,10 +593,141 @@ static plait_cone cone_round(vec3 axis, const triangle_normals *t, int count)
 	return (plait_cone){axis, angle_of(tangent, 1.0f) + ANGLE_SLACK};
 }
 
+#if defined(__SSE2__)
+/* Three coordinates of four lanes. */
+typedef struct lanes3 {
+	__m128 x, y, z;
+} lanes3;
+
+static inline lanes3 lanes3_sub(lanes3 a, lanes3 b)
+{
+	return (lanes3){_mm_sub_ps(a.x, b.x), _mm_sub_ps(a.y, b.y), _mm_sub_ps(a.z, b.z)};
+}
+
+static inline lanes3 lanes3_add(lanes3 a, lanes3 b)
+{
+	return (lanes3){_mm_add_ps(a.x, b.x), _mm_add_ps(a.y, b.y), _mm_add_ps(a.z, b.z)};
+}
+
+static inline lanes3 lanes3_scale(lanes3 a, __m128 s)
+{
+	return (lanes3){_mm_mul_ps(a.x, s), _mm_mul_ps(a.y, s), _mm_mul_ps(a.z, s)};
+}
+
+/* a + s b, as v3_mul_add. */
+static inline lanes3 lanes3_mul_add(lanes3 a, __m128 s, lanes3 b)
+{
+	return (lanes3){_mm_add_ps(a.x, _mm_mul_ps(s, b.x)), _mm_add_ps(a.y, _mm_mul_ps(s, b.y)),
+	                _mm_add_ps(a.z, _mm_mul_ps(s, b.z))};
+}
+
+static inline lanes3 lanes3_cross(lanes3 a, lanes3 b)
+{
+	return (lanes3){_mm_sub_ps(_mm_mul_ps(a.y, b.z), _mm_mul_ps(a.z, b.y)),
+	                _mm_sub_ps(_mm_mul_ps(a.z, b.x), _mm_mul_ps(a.x, b.z)),
+	                _mm_sub_ps(_mm_mul_ps(a.x, b.y), _mm_mul_ps(a.y, b.x))};
+}
+
+static inline __m128 lanes3_dot(lanes3 a, lanes3 b)
+{
+	return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a.x, b.x), _mm_mul_ps(a.y, b.y)), _mm_mul_ps(a.z, b.z));
+}
+
+/* Lane k of each array: points[v[k]]. */
+static inline lanes3 lanes3_gather(const vec3 *points, const int v[4])
+{
+	return (lanes3){_mm_setr_ps(points[v[0]].x, points[v[1]].x, points[v[2]].x, points[v[3]].x),
+	                _mm_setr_ps(points[v[0]].y, points[v[1]].y, points[v[2]].y, points[v[3]].y),
+	                _mm_setr_ps(points[v[0]].z, points[v[1]].z, points[v[2]].z, points[v[3]].z)};
+}
+
+static inline vec3 lanes3_get(lanes3 a, int k)
+{
+	_Alignas(16) float x[4], y[4], z[4];
+	_mm_store_ps(x, a.x);
+	_mm_store_ps(y, a.y);
+	_mm_store_ps(z, a.z);
+	return v3(x[k], y[k], z[k]);
+}
+
+/* triangles_cone for one to four triangles on paths without guards (the gather's guess: every
+ * leaf's cone at every gather, a tenth of hang-self's frame), the triangles in lanes: the
+ * operations of triangle_normals_of and cone_round, lane by lane, so the same cone to the bit.
+ * Lanes past count repeat the first triangle, which changes no least or largest. */
+static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
+                                  int count)
+{
+	lanes3 a[3], b[3];
+	const __m128 back = _mm_set1_ps(-paths->back), on = _mm_set1_ps(paths->on);
+	for (int m = 0; m < 3; ++m) {
+		int v[4];
+		for (int k = 0; k < 4; ++k) {
+			v[k] = triangles[which[k < count ? k : 0]][m];
+		}
+		lanes3 at = lanes3_gather(paths->at, v), motion = lanes3_gather(paths->motion, v);
+		a[m] = lanes3_mul_add(at, back, motion);
+		b[m] = lanes3_mul_add(at, on, motion);
+	}
+	lanes3 e1a = lanes3_sub(a[1], a[0]), e2a = lanes3_sub(a[2], a[0]);
+	lanes3 e1b = lanes3_sub(b[1], b[0]), e2b = lanes3_sub(b[2], b[0]);
+	lanes3 n[3] = {
+	    lanes3_cross(e1a, e2a),
+	    lanes3_scale(lanes3_add(lanes3_cross(e1a, e2b), lanes3_cross(e1b, e2a)), _mm_set1_ps(0.5f)),
+	    lanes3_cross(e1b, e2b)};
+	__m128 e1_sq = _mm_max_ps(lanes3_dot(e1a, e1a), lanes3_dot(e1b, e1b));
+	__m128 e2_sq = _mm_max_ps(lanes3_dot(e2a, e2a), lanes3_dot(e2b, e2b));
+	__m128 rho = _mm_mul_ps(_mm_set1_ps(0.5e-6f), _mm_add_ps(e1_sq, e2_sq));
+	/* The axis: the normals' sum, triangle by triangle in order, as triangles_cone adds it. */
+	lanes3 each = lanes3_add(n[0], lanes3_add(n[1], n[2]));
+	vec3 sum = {0.0f, 0.0f, 0.0f};
+	for (int k = 0; k < count; ++k) {
+		sum = v3_add(sum, lanes3_get(each, k));
+	}
+	float length = v3_length(sum);
+	if (!(length > 0.0f)) {
+		return no_cone();
+	}
+	vec3 axis = v3_scale(sum, 1.0f / length);
+	lanes3 axes = {_mm_set1_ps(axis.x), _mm_set1_ps(axis.y), _mm_set1_ps(axis.z)};
+	/* cone_round: every coefficient in front of the axis, tan^2 of the widest. */
+	__m128 along[3], widest_sq = _mm_setzero_ps();
+	int behind = 0, overflow = 0;
+	for (int m = 0; m < 3; ++m) {
+		along[m] = lanes3_dot(n[m], axes);
+		behind |= _mm_movemask_ps(_mm_cmpngt_ps(along[m], _mm_setzero_ps()));
+		lanes3 across = lanes3_cross(n[m], axes);
+		__m128 ratio = _mm_div_ps(lanes3_dot(across, across), _mm_mul_ps(along[m], along[m]));
+		overflow |= _mm_movemask_ps(_mm_cmpnlt_ps(ratio, _mm_set1_ps(INFINITY)));
+		widest_sq = _mm_max_ps(widest_sq, ratio);
+	}
+	if (behind != 0 || overflow != 0) {
+		return no_cone();
+	}
+	_Alignas(16) float w[4];
+	_mm_store_ps(w, widest_sq);
+	float widest = sqrtf(plait_maxf(plait_maxf(w[0], w[1]), plait_maxf(w[2], w[3])));
+	__m128 least = _mm_min_ps(along[0], _mm_min_ps(along[1], along[2]));
+	if (_mm_movemask_ps(_mm_cmpnlt_ps(rho, least)) != 0) {
+		return no_cone();
+	}
+	__m128 tangents =
+	    _mm_div_ps(_mm_add_ps(_mm_mul_ps(least, _mm_set1_ps(widest)), rho), _mm_sub_ps(least, rho));
+	_Alignas(16) float t[4];
+	_mm_store_ps(t, tangents);
+	float tangent = plait_maxf(plait_maxf(plait_maxf(0.0f, t[0]), t[1]), plait_maxf(t[2], t[3]));
+	return (plait_cone){axis, angle_of(tangent, 1.0f) + ANGLE_SLACK};
+}
+#endif
+
 /* The cone of `count` triangles (at most a leaf's) round their normals' mean. */
 static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
                                  int count)
 {
+#if defined(__SSE2__)
+	if (count <= 4 && paths->motion != NULL && paths->guard == NULL) {
+		return triangles_cone4(paths, triangles, which, count);
+	}
+#endif
 	triangle_normals t[8];
 	if (count > 8) {
 		int half = count / 2;

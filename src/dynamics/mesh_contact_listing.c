@@ -49,12 +49,15 @@ static void fit_box_range(void *context, int begin, int end)
 				mean = v3_add(mean, mc->motion[el->v[k]]);
 			}
 			mean = v3_scale(mean, 1.0f / (float)el->size);
-			float spread = 0.0f;
+			/* One square root: it is monotonic, so the root of the largest square is the
+			 * largest root. */
+			float spread_sq = 0.0f;
 			for (int k = 0; k < el->size; ++k) {
-				spread = plait_maxf(spread, v3_length(v3_sub(mc->motion[el->v[k]], mean)));
+				vec3 d = v3_sub(mc->motion[el->v[k]], mean);
+				spread_sq = plait_maxf(spread_sq, v3_dot(d, d));
 			}
 			mc->element_motion[e] = mean;
-			mc->element_spread[e] = spread;
+			mc->element_spread[e] = sqrtf(spread_sq);
 		}
 		for (int k = 0; k < el->size; ++k) {
 			int i = el->v[k];
