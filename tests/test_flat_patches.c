@@ -468,3 +468,48 @@ Test(flat_patches, leaf_cones_without_guards_agree_with_the_general_fit)
 	free(motion);
 	mesh_free(&m);
 }
+
+/* The failsafe's check of a patch the gather passed over (plait_flat_patches_keeps_flat): a
+ * patch lifted whole keeps flat; one with any of its triangles turned over does not, wherever
+ * that triangle lies in the patch's list (the check takes four at a time). */
+Test(flat_patches, a_patch_keeps_flat_until_any_triangle_turns_over)
+{
+	patch_mesh m = grid(10, 9);
+	vec3 *still = calloc((size_t)m.vertex_count, sizeof *still);
+	vec3 *motion = malloc(sizeof *motion * (size_t)m.vertex_count);
+	vec3 *lift = malloc(sizeof *lift * (size_t)m.vertex_count);
+	plait_patch_paths rest = {m.x, still, NULL, 1.0f, 0.0f};
+	plait_flat_patches_fit(&m.patches, &m.tree, &rest);
+	vec3 axis;
+	cr_assert(plait_flat_patches_flat(&m.patches, 0, &rest, &axis));
+	for (int i = 0; i < m.vertex_count; ++i) {
+		lift[i] = v3(0.001f, 0.003f, -0.002f);
+	}
+	plait_patch_paths lifted = {m.x, lift, NULL, 1.0f, 0.0f};
+	int checked = 0;
+	for (int node = 0; node < m.tree.node_count; ++node) {
+		int begin = m.patches.node_begin[node], end = m.patches.node_end[node];
+		if (end - begin < 16 || !plait_flat_patches_flat(&m.patches, node, &rest, NULL)) {
+			continue; /* never flat (too small, or no star round its centre) */
+		}
+		cr_expect(plait_flat_patches_keeps_flat(&m.patches, node, axis, &lifted), "node %d", node);
+		/* Each of the node's triangles in turn: one corner pulled across its opposite edge. */
+		for (int k = begin; k < end; ++k) {
+			const int *v = m.patches.triangles[m.patches.order[k]];
+			vec3 across = v3_sub(v3_scale(v3_add(m.x[v[1]], m.x[v[2]]), 0.5f), m.x[v[0]]);
+			for (int i = 0; i < m.vertex_count; ++i) {
+				motion[i] = v3(0.0f, 0.0f, 0.0f);
+			}
+			motion[v[0]] = v3_scale(across, -2.0f); /* the path starts beyond the edge */
+			plait_patch_paths turned = {m.x, motion, NULL, 1.0f, 0.0f};
+			cr_expect(!plait_flat_patches_keeps_flat(&m.patches, node, axis, &turned),
+			          "node %d keeps flat with triangle %d of [%d, %d) turned over", node, k, begin, end);
+			checked += 1;
+		}
+	}
+	cr_assert_gt(checked, 100);
+	free(lift);
+	free(motion);
+	free(still);
+	mesh_free(&m);
+}

@@ -650,6 +650,39 @@ static inline vec3 lanes3_get(lanes3 a, int k)
 	return v3(x[k], y[k], z[k]);
 }
 
+/* triangle_normals_of for four triangles on paths without guards, lane k for triangle v[k]. */
+typedef struct triangle_normals4 {
+	lanes3 n[3];
+	__m128 rho;
+} triangle_normals4;
+
+static triangle_normals4 triangle_normals4_of(const plait_patch_paths *paths, const int *const v[4])
+{
+	lanes3 a[3], b[3];
+	const __m128 back = _mm_set1_ps(-paths->back), on = _mm_set1_ps(paths->on);
+	for (int m = 0; m < 3; ++m) {
+		int corner[4] = {v[0][m], v[1][m], v[2][m], v[3][m]};
+		lanes3 at = lanes3_gather(paths->at, corner), motion = lanes3_gather(paths->motion, corner);
+		a[m] = lanes3_mul_add(at, back, motion);
+		b[m] = lanes3_mul_add(at, on, motion);
+	}
+	lanes3 e1a = lanes3_sub(a[1], a[0]), e2a = lanes3_sub(a[2], a[0]);
+	lanes3 e1b = lanes3_sub(b[1], b[0]), e2b = lanes3_sub(b[2], b[0]);
+	__m128 e1_sq = _mm_max_ps(lanes3_dot(e1a, e1a), lanes3_dot(e1b, e1b));
+	__m128 e2_sq = _mm_max_ps(lanes3_dot(e2a, e2a), lanes3_dot(e2b, e2b));
+	return (triangle_normals4){
+	    {lanes3_cross(e1a, e2a),
+	     lanes3_scale(lanes3_add(lanes3_cross(e1a, e2b), lanes3_cross(e1b, e2a)), _mm_set1_ps(0.5f)),
+	     lanes3_cross(e1b, e2b)},
+	    _mm_mul_ps(_mm_set1_ps(0.5e-6f), _mm_add_ps(e1_sq, e2_sq))};
+}
+
+/* Whether the paths can take the fast lanes: moving (or still) vertices, no guards. */
+static bool lanes_fit(const plait_patch_paths *paths)
+{
+	return paths->motion != NULL && paths->guard == NULL;
+}
+
 /* triangles_cone for one to four triangles on paths without guards (the gather's guess: every
  * leaf's cone at every gather, a tenth of hang-self's frame), the triangles in lanes: the
  * operations of triangle_normals_of and cone_round, lane by lane, so the same cone to the bit.
@@ -657,26 +690,13 @@ static inline vec3 lanes3_get(lanes3 a, int k)
 static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
                                   int count)
 {
-	lanes3 a[3], b[3];
-	const __m128 back = _mm_set1_ps(-paths->back), on = _mm_set1_ps(paths->on);
-	for (int m = 0; m < 3; ++m) {
-		int v[4];
-		for (int k = 0; k < 4; ++k) {
-			v[k] = triangles[which[k < count ? k : 0]][m];
-		}
-		lanes3 at = lanes3_gather(paths->at, v), motion = lanes3_gather(paths->motion, v);
-		a[m] = lanes3_mul_add(at, back, motion);
-		b[m] = lanes3_mul_add(at, on, motion);
+	const int *v[4];
+	for (int k = 0; k < 4; ++k) {
+		v[k] = triangles[which[k < count ? k : 0]];
 	}
-	lanes3 e1a = lanes3_sub(a[1], a[0]), e2a = lanes3_sub(a[2], a[0]);
-	lanes3 e1b = lanes3_sub(b[1], b[0]), e2b = lanes3_sub(b[2], b[0]);
-	lanes3 n[3] = {
-	    lanes3_cross(e1a, e2a),
-	    lanes3_scale(lanes3_add(lanes3_cross(e1a, e2b), lanes3_cross(e1b, e2a)), _mm_set1_ps(0.5f)),
-	    lanes3_cross(e1b, e2b)};
-	__m128 e1_sq = _mm_max_ps(lanes3_dot(e1a, e1a), lanes3_dot(e1b, e1b));
-	__m128 e2_sq = _mm_max_ps(lanes3_dot(e2a, e2a), lanes3_dot(e2b, e2b));
-	__m128 rho = _mm_mul_ps(_mm_set1_ps(0.5e-6f), _mm_add_ps(e1_sq, e2_sq));
+	triangle_normals4 t = triangle_normals4_of(paths, v);
+	lanes3 *n = t.n;
+	__m128 rho = t.rho;
 	/* The axis: the normals' sum, triangle by triangle in order, as triangles_cone adds it. */
 	lanes3 each = lanes3_add(n[0], lanes3_add(n[1], n[2]));
 	vec3 sum = {0.0f, 0.0f, 0.0f};
@@ -712,9 +732,10 @@ static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*tr
 	}
 	__m128 tangents =
 	    _mm_div_ps(_mm_add_ps(_mm_mul_ps(least, _mm_set1_ps(widest)), rho), _mm_sub_ps(least, rho));
-	_Alignas(16) float t[4];
-	_mm_store_ps(t, tangents);
-	float tangent = plait_maxf(plait_maxf(plait_maxf(0.0f, t[0]), t[1]), plait_maxf(t[2], t[3]));
+	_Alignas(16) float lane_tangent[4];
+	_mm_store_ps(lane_tangent, tangents);
+	float tangent = plait_maxf(plait_maxf(plait_maxf(0.0f, lane_tangent[0]), lane_tangent[1]),
+	                           plait_maxf(lane_tangent[2], lane_tangent[3]));
 	return (plait_cone){axis, angle_of(tangent, 1.0f) + ANGLE_SLACK};
 }
 #endif
@@ -724,7 +745,7 @@ static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*tri
                                  int count)
 {
 #if defined(__SSE2__)
-	if (count <= 4 && paths->motion != NULL && paths->guard == NULL) {
+	if (count <= 4 && lanes_fit(paths)) {
 		return triangles_cone4(paths, triangles, which, count);
 	}
 #endif
@@ -900,21 +921,48 @@ static bool faces(const plait_patch_paths *paths, const int *v, vec3 d)
 	return v3_dot(t.n[0], d) > t.rho && v3_dot(t.n[1], d) > t.rho && v3_dot(t.n[2], d) > t.rho;
 }
 
+/* Whether every triangle triangles[list[k]], k < count, faces d along the paths (faces). */
+static bool all_face(const plait_patch_paths *paths, const int (*triangles)[3], const int *list, int count,
+                     vec3 d)
+{
+	int k = 0;
+#if defined(__SSE2__)
+	if (lanes_fit(paths)) {
+		lanes3 axis = {_mm_set1_ps(d.x), _mm_set1_ps(d.y), _mm_set1_ps(d.z)};
+		for (; k < count; k += 4) {
+			const int *v[4];
+			for (int lane = 0; lane < 4; ++lane) {
+				v[lane] = triangles[list[k + lane < count ? k + lane : k]];
+			}
+			triangle_normals4 t = triangle_normals4_of(paths, v);
+			__m128 front = _mm_and_ps(_mm_cmpgt_ps(lanes3_dot(t.n[0], axis), t.rho),
+			                          _mm_and_ps(_mm_cmpgt_ps(lanes3_dot(t.n[1], axis), t.rho),
+			                                     _mm_cmpgt_ps(lanes3_dot(t.n[2], axis), t.rho)));
+			if (_mm_movemask_ps(front) != 0xF) {
+				return false;
+			}
+		}
+		return true;
+	}
+#endif
+	for (; k < count; ++k) {
+		if (!faces(paths, triangles[list[k]], d)) {
+			return false;
+		}
+	}
+	return true;
+}
+
 bool plait_flat_patches_keeps_flat(const plait_flat_patches *fp, int node, vec3 axis,
                                    const plait_patch_paths *paths)
 {
 	if (fp->node_count == 0 || fp->contour_first[node + 1] == fp->contour_first[node]) {
 		return false;
 	}
-	for (int k = fp->node_begin[node]; k < fp->node_end[node]; ++k) {
-		if (!faces(paths, fp->triangles[fp->order[k]], axis)) {
-			return false;
-		}
-	}
-	for (int k = fp->notch_first[node]; k < fp->notch_first[node + 1]; ++k) {
-		if (!faces(paths, fp->triangles[fp->notch[k]], axis)) {
-			return false;
-		}
-	}
-	return star_contour(fp, node, axis, paths);
+	const int(*triangles)[3] = (const int(*)[3])fp->triangles;
+	return all_face(paths, triangles, fp->order + fp->node_begin[node],
+	                fp->node_end[node] - fp->node_begin[node], axis) &&
+	       all_face(paths, triangles, fp->notch + fp->notch_first[node],
+	                fp->notch_first[node + 1] - fp->notch_first[node], axis) &&
+	       star_contour(fp, node, axis, paths);
 }
