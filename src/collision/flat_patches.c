@@ -2,9 +2,8 @@
 
 #include <math.h>
 #include <string.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+
+#include "core/lanes.h"
 
 #include "topology/topology.h"
 
@@ -593,63 +592,7 @@ static plait_cone cone_round(vec3 axis, const triangle_normals *t, int count)
 	return (plait_cone){axis, angle_of(tangent, 1.0f) + ANGLE_SLACK};
 }
 
-#if defined(__SSE2__)
-/* Three coordinates of four lanes. */
-typedef struct lanes3 {
-	__m128 x, y, z;
-} lanes3;
-
-static inline lanes3 lanes3_sub(lanes3 a, lanes3 b)
-{
-	return (lanes3){_mm_sub_ps(a.x, b.x), _mm_sub_ps(a.y, b.y), _mm_sub_ps(a.z, b.z)};
-}
-
-static inline lanes3 lanes3_add(lanes3 a, lanes3 b)
-{
-	return (lanes3){_mm_add_ps(a.x, b.x), _mm_add_ps(a.y, b.y), _mm_add_ps(a.z, b.z)};
-}
-
-static inline lanes3 lanes3_scale(lanes3 a, __m128 s)
-{
-	return (lanes3){_mm_mul_ps(a.x, s), _mm_mul_ps(a.y, s), _mm_mul_ps(a.z, s)};
-}
-
-/* a + s b, as v3_mul_add. */
-static inline lanes3 lanes3_mul_add(lanes3 a, __m128 s, lanes3 b)
-{
-	return (lanes3){_mm_add_ps(a.x, _mm_mul_ps(s, b.x)), _mm_add_ps(a.y, _mm_mul_ps(s, b.y)),
-	                _mm_add_ps(a.z, _mm_mul_ps(s, b.z))};
-}
-
-static inline lanes3 lanes3_cross(lanes3 a, lanes3 b)
-{
-	return (lanes3){_mm_sub_ps(_mm_mul_ps(a.y, b.z), _mm_mul_ps(a.z, b.y)),
-	                _mm_sub_ps(_mm_mul_ps(a.z, b.x), _mm_mul_ps(a.x, b.z)),
-	                _mm_sub_ps(_mm_mul_ps(a.x, b.y), _mm_mul_ps(a.y, b.x))};
-}
-
-static inline __m128 lanes3_dot(lanes3 a, lanes3 b)
-{
-	return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a.x, b.x), _mm_mul_ps(a.y, b.y)), _mm_mul_ps(a.z, b.z));
-}
-
-/* Lane k of each array: points[v[k]]. */
-static inline lanes3 lanes3_gather(const vec3 *points, const int v[4])
-{
-	return (lanes3){_mm_setr_ps(points[v[0]].x, points[v[1]].x, points[v[2]].x, points[v[3]].x),
-	                _mm_setr_ps(points[v[0]].y, points[v[1]].y, points[v[2]].y, points[v[3]].y),
-	                _mm_setr_ps(points[v[0]].z, points[v[1]].z, points[v[2]].z, points[v[3]].z)};
-}
-
-static inline vec3 lanes3_get(lanes3 a, int k)
-{
-	_Alignas(16) float x[4], y[4], z[4];
-	_mm_store_ps(x, a.x);
-	_mm_store_ps(y, a.y);
-	_mm_store_ps(z, a.z);
-	return v3(x[k], y[k], z[k]);
-}
-
+#if PLAIT_HAVE_LANES
 /* triangle_normals_of for four triangles on paths without guards, lane k for triangle v[k]. */
 typedef struct triangle_normals4 {
 	lanes3 n[3];
@@ -744,7 +687,7 @@ static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*tr
 static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
                                  int count)
 {
-#if defined(__SSE2__)
+#if PLAIT_HAVE_LANES
 	if (count <= 4 && lanes_fit(paths)) {
 		return triangles_cone4(paths, triangles, which, count);
 	}
@@ -926,7 +869,7 @@ static bool all_face(const plait_patch_paths *paths, const int (*triangles)[3], 
                      vec3 d)
 {
 	int k = 0;
-#if defined(__SSE2__)
+#if PLAIT_HAVE_LANES
 	if (lanes_fit(paths)) {
 		lanes3 axis = {_mm_set1_ps(d.x), _mm_set1_ps(d.y), _mm_set1_ps(d.z)};
 		for (; k < count; k += 4) {
