@@ -592,7 +592,7 @@ static plait_cone cone_round(vec3 axis, const triangle_normals *t, int count)
 	return (plait_cone){axis, angle_of(tangent, 1.0f) + ANGLE_SLACK};
 }
 
-#if PLAIT_HAVE_LANES
+#if defined(PLAIT_HAVE_LANES)
 /* triangle_normals_of for four triangles on paths without guards, lane k for triangle v[k]. */
 typedef struct triangle_normals4 {
 	lanes3 n[3];
@@ -687,7 +687,7 @@ static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*tr
 static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
                                  int count)
 {
-#if PLAIT_HAVE_LANES
+#if defined(PLAIT_HAVE_LANES)
 	if (count <= 4 && lanes_fit(paths)) {
 		return triangles_cone4(paths, triangles, which, count);
 	}
@@ -869,7 +869,7 @@ static bool all_face(const plait_patch_paths *paths, const int (*triangles)[3], 
                      vec3 d)
 {
 	int k = 0;
-#if PLAIT_HAVE_LANES
+#if defined(PLAIT_HAVE_LANES)
 	if (lanes_fit(paths)) {
 		lanes3 axis = {_mm_set1_ps(d.x), _mm_set1_ps(d.y), _mm_set1_ps(d.z)};
 		for (; k < count; k += 4) {

@@ -714,6 +714,8 @@ static void collide_collider_range(void *context, int begin, int end)
 				whole = size & ~7;
 				count = plait_cull_particles_avx2(p, &bounds, chunk, whole, near);
 			}
+#else
+			(void)bounds; /* the portable cull reads the job's copy */
 #endif
 			count += cull_particles(job, p, chunk + whole, size - whole, near + count);
 			for (int k = 0; k < count; ++k) {
