@@ -203,6 +203,10 @@ int main(int argc, char **argv)
 			chosen[k] = any = true;
 		}
 	}
+	if (options.stiff_substeps != 0 && !options.stiff) {
+		fprintf(stderr, "bench_collide: --substeps sets the stiff hang-self's substeps; give --stiff too\n");
+		return 2;
+	}
 	int failures = 0;
 	for (int k = 0; k < SCENE_COUNT; ++k) {
 		if (any && !chosen[k]) {

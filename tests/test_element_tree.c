@@ -1,9 +1,11 @@
 /* collision/element_tree.h and the mesh shape's box queries: every pair of boxes that meet is
  * reported once, and nothing else, whatever the leaves hold. A pair missed here is a contact the
  * gather never lists, so the traversals are compared with a test of every pair, on boxes that
- * touch exactly, lie a margin apart, or are empty lanes' neighbours (leaves of 1 to 4). */
+ * touch exactly, lie a margin apart, are empty lanes' neighbours (leaves of 1 to 4), or have no
+ * bounds at all (a frame gone non-finite). */
 #include <criterion/criterion.h>
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -64,6 +66,11 @@ Test(element_tree, self_pairs_are_every_pair_that_meets_once)
 		vec3 *lower = malloc(sizeof *lower * (size_t)count), *upper = malloc(sizeof *upper * (size_t)count);
 		vec3 *centre = malloc(sizeof *centre * (size_t)count);
 		random_boxes(7u + (unsigned)count, count, 1.0f, 0.08f, lower, upper, centre);
+		if (count % 3 == 0) {
+			/* A frame gone non-finite: one box without bounds, which meets every other. */
+			lower[count / 2] = v3(-INFINITY, -INFINITY, -INFINITY);
+			upper[count / 2] = v3(INFINITY, INFINITY, INFINITY);
+		}
 		plait_element_tree tree = {0};
 		cr_assert(plait_element_tree_build(&tree, &heap, centre, count));
 		plait_element_tree_refit(&tree, lower, upper);
@@ -95,6 +102,8 @@ Test(element_tree, pairs_between_trees_within_the_margin)
 	vec3 la[97], ua[97], ca[97], lb[61], ub[61], cb[61];
 	random_boxes(11u, count_a, 1.0f, 0.05f, la, ua, ca);
 	random_boxes(23u, count_b, 1.0f, 0.05f, lb, ub, cb);
+	la[40] = v3(-INFINITY, -INFINITY, -INFINITY); /* a box without bounds meets every other */
+	ua[40] = v3(INFINITY, INFINITY, INFINITY);
 	plait_element_tree a = {0}, b = {0};
 	cr_assert(plait_element_tree_build(&a, &heap, ca, count_a));
 	cr_assert(plait_element_tree_build(&b, &heap, cb, count_b));

@@ -158,6 +158,11 @@ static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
 	       la.z <= ub.z + margin && lb.z <= ua.z + margin;
 }
 
+/* Median splits halve the element count at every level, so no tree is deeper than 32 levels;
+ * a depth-first pair traversal adds at most two pending pairs per level of either tree. */
+#define STACK_PAIRS 160
+
+#if defined(__SSE2__)
 /* The index of the lowest set bit of a nonzero mask of at most 4 bits. */
 static inline int lowest_bit(int mask)
 {
@@ -172,13 +177,9 @@ static inline int lowest_bit(int mask)
 #endif
 }
 
-/* Median splits halve the element count at every level, so no tree is deeper than 32 levels;
- * a depth-first pair traversal adds at most two pending pairs per level of either tree. */
-#define STACK_PAIRS 160
-
-#if defined(__SSE2__)
 /* The boxes of leaf b's elements side by side (lane k: its k-th), upper bounds grown by the
- * margin; lanes past its count are empty (lower +inf, upper -inf) and meet nothing. */
+ * margin; lanes past its count are empty (lower +inf, upper -inf), and masked out by the caller
+ * as well (an infinite box meets even those). */
 typedef struct leaf_lanes {
 	__m128 lx, ly, lz, ux, uy, uz;
 } leaf_lanes;
@@ -234,7 +235,8 @@ static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *
 	const int *order_b = tree_b->order + b->first;
 	for (int i = 0; i < a->count; ++i) {
 		int ei = tree_a->order[a->first + i];
-		int meet = leaf_lanes_meet(&lanes, lower_a[ei], upper_a[ei], margin);
+		/* Only b's own lanes: an infinite box (a frame gone non-finite) meets the empty ones. */
+		int meet = leaf_lanes_meet(&lanes, lower_a[ei], upper_a[ei], margin) & ((1 << b->count) - 1);
 		if (same) {
 			meet &= ~((2 << i) - 1); /* the pairs after i */
 		}

@@ -629,10 +629,15 @@ static bool lanes_fit(const plait_patch_paths *paths)
 /* triangles_cone for one to four triangles on paths without guards (the gather's guess: every
  * leaf's cone at every gather, a tenth of hang-self's frame), the triangles in lanes: the
  * operations of triangle_normals_of and cone_round, lane by lane, so the same cone to the bit.
- * Lanes past count repeat the first triangle, which changes no least or largest. */
+ * Lanes past count repeat the first triangle, which changes no least or largest. The lanes'
+ * max and min differ from fmaxf and fminf only on a NaN operand; a NaN there comes from a NaN
+ * normal, which ends in no cone on both paths (a failed "in front" test). */
 static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*triangles)[3], const int *which,
                                   int count)
 {
+	if (count <= 0) {
+		return no_cone(); /* as triangles_cone: no normal to sum */
+	}
 	const int *v[4];
 	for (int k = 0; k < 4; ++k) {
 		v[k] = triangles[which[k < count ? k : 0]];
@@ -641,10 +646,11 @@ static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*tr
 	lanes3 *n = t.n;
 	__m128 rho = t.rho;
 	/* The axis: the normals' sum, triangle by triangle in order, as triangles_cone adds it. */
-	lanes3 each = lanes3_add(n[0], lanes3_add(n[1], n[2]));
+	vec3 each[4];
+	lanes3_store(lanes3_add(n[0], lanes3_add(n[1], n[2])), each);
 	vec3 sum = {0.0f, 0.0f, 0.0f};
 	for (int k = 0; k < count; ++k) {
-		sum = v3_add(sum, lanes3_get(each, k));
+		sum = v3_add(sum, each[k]);
 	}
 	float length = v3_length(sum);
 	if (!(length > 0.0f)) {

@@ -2,13 +2,17 @@
  * (triangles, collision elements) that gather their vertices by index. Each operation is the
  * one of core/math.h, operation for operation in the same order (no fused multiply-add; min
  * and max return the second operand on ties, as plait_minf and plait_maxf do), so a lane gives
- * the bits the scalar code gives. Only where __SSE2__ is defined (every x86-64 compiler). */
+ * the bits the scalar code gives, where the scalar code rounds each float operation to float
+ * (FLT_EVAL_METHOD 0, as on x86-64). Only where __SSE2__ is defined (gcc and clang on x86-64;
+ * not MSVC, which takes the scalar code). */
 #ifndef PLAIT_CORE_LANES_H
 #define PLAIT_CORE_LANES_H
 
+#include <float.h>
+
 #include "core/math.h"
 
-#if defined(__SSE2__)
+#if defined(__SSE2__) && defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 0
 #include <emmintrin.h>
 
 #define PLAIT_HAVE_LANES 1
@@ -92,13 +96,6 @@ static inline void lanes3_store(lanes3 a, vec3 out[4])
 	for (int k = 0; k < 4; ++k) {
 		out[k] = v3(x[k], y[k], z[k]);
 	}
-}
-
-static inline vec3 lanes3_get(lanes3 a, int k)
-{
-	vec3 all[4];
-	lanes3_store(a, all);
-	return all[k];
 }
 #endif
 

@@ -545,9 +545,10 @@ static int finish_sphere_batch(collider_job *job, sphere_batch *batch, int count
 static inline int path_may_reach(const collider_job *job, vec3 a, vec3 b)
 {
 	vec3 lower = job->world_lower, upper = job->world_upper;
-	int in_box = (plait_maxf(a.x, b.x) >= lower.x) & (plait_minf(a.x, b.x) <= upper.x) &
-	             (plait_maxf(a.y, b.y) >= lower.y) & (plait_minf(a.y, b.y) <= upper.y) &
-	             (plait_maxf(a.z, b.z) >= lower.z) & (plait_minf(a.z, b.z) <= upper.z);
+	/* Bitwise, not logical: one test without a branch each. */
+	int in_box = (int)(plait_maxf(a.x, b.x) >= lower.x) & (int)(plait_minf(a.x, b.x) <= upper.x) &
+	             (int)(plait_maxf(a.y, b.y) >= lower.y) & (int)(plait_minf(a.y, b.y) <= upper.y) &
+	             (int)(plait_maxf(a.z, b.z) >= lower.z) & (int)(plait_minf(a.z, b.z) <= upper.z);
 	/* The ball around the path (its midpoint, half its length) must reach the collider's. */
 	float reach = job->ball_radius + 0.5f * v3_length(v3_sub(b, a));
 	int in_ball = v3_length_sq(v3_sub(v3_scale(v3_add(a, b), 0.5f), job->ball_centre)) <= reach * reach;
