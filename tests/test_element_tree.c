@@ -15,6 +15,15 @@
 
 static const plait_allocator heap = {NULL, NULL, NULL};
 
+/* The traversals as compiled without SSE2 (included at the end of this file): the portable
+ * code every other build runs, to which the lanes must keep the visit order. */
+void portable_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
+                         plait_element_pair_visitor *visit, void *context);
+void portable_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
+                                 const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b,
+                                 float margin, const plait_node_skip *skip, plait_element_pair_visitor *visit,
+                                 void *context);
+
 /* A small deterministic generator (the test must not depend on the libc's rand). */
 static float next_unit(unsigned *state)
 {
@@ -127,6 +136,61 @@ Test(element_tree, pairs_between_trees_within_the_margin)
 	plait_element_tree_destroy(&b, &heap);
 }
 
+/* The visits in order. */
+typedef struct visit_log {
+	int (*pairs)[2];
+	int count, capacity;
+} visit_log;
+
+static void log_pair(int a, int b, void *context)
+{
+	visit_log *log = context;
+	cr_assert_lt(log->count, log->capacity);
+	log->pairs[log->count][0] = a;
+	log->pairs[log->count++][1] = b;
+}
+
+static void expect_same_visits(const visit_log *got, const visit_log *want, const char *what)
+{
+	cr_assert_eq(got->count, want->count, "%s: %d visits, the portable code's %d", what, got->count,
+	             want->count);
+	for (int k = 0; k < got->count; ++k) {
+		cr_assert(got->pairs[k][0] == want->pairs[k][0] && got->pairs[k][1] == want->pairs[k][1],
+		          "%s: visit %d is (%d, %d), the portable code's (%d, %d)", what, k, got->pairs[k][0],
+		          got->pairs[k][1], want->pairs[k][0], want->pairs[k][1]);
+	}
+}
+
+/* The visit order feeds the order of the contact list, so of every result: the lanes must meet
+ * the pairs in the portable code's order, or builds with and without SSE2 would part ways. */
+Test(element_tree, visits_come_in_the_portable_codes_order)
+{
+	enum { COUNT = 203, OTHER = 77, ROOM = COUNT * COUNT };
+	vec3 lower[COUNT], upper[COUNT], centre[COUNT], lb[OTHER], ub[OTHER], cb[OTHER];
+	random_boxes(31u, COUNT, 1.0f, 0.09f, lower, upper, centre);
+	random_boxes(37u, OTHER, 1.0f, 0.07f, lb, ub, cb);
+	lower[100] = v3(-INFINITY, -INFINITY, -INFINITY);
+	upper[100] = v3(INFINITY, INFINITY, INFINITY);
+	plait_element_tree tree = {0}, other = {0};
+	cr_assert(plait_element_tree_build(&tree, &heap, centre, COUNT));
+	cr_assert(plait_element_tree_build(&other, &heap, cb, OTHER));
+	plait_element_tree_refit(&tree, lower, upper);
+	plait_element_tree_refit(&other, lb, ub);
+	visit_log got = {malloc(sizeof *got.pairs * ROOM), 0, ROOM},
+	          want = {malloc(sizeof *want.pairs * ROOM), 0, ROOM};
+	plait_element_tree_pairs(&tree, lower, upper, log_pair, &got);
+	portable_tree_pairs(&tree, lower, upper, log_pair, &want);
+	expect_same_visits(&got, &want, "self");
+	got.count = want.count = 0;
+	plait_element_tree_pairs_between(&tree, lower, upper, &other, lb, ub, 0.02f, NULL, log_pair, &got);
+	portable_tree_pairs_between(&tree, lower, upper, &other, lb, ub, 0.02f, NULL, log_pair, &want);
+	expect_same_visits(&got, &want, "between");
+	free(got.pairs);
+	free(want.pairs);
+	plait_element_tree_destroy(&tree, &heap);
+	plait_element_tree_destroy(&other, &heap);
+}
+
 typedef struct visit_count {
 	int visited;
 } visit_count;
@@ -179,3 +243,19 @@ Test(mesh_shape, any_is_whether_the_visit_finds_a_triangle)
 	cr_assert(found > 200 && found < 1800, "the boxes should both meet and miss the mesh (%d met)", found);
 	plait_mesh_shape_destroy(&shape, &heap);
 }
+
+/* The portable traversals: element_tree.c again, its functions renamed, without SSE2. */
+#define plait_element_tree_build portable_tree_build
+#define plait_element_tree_cut portable_tree_cut
+#define plait_element_tree_destroy portable_tree_destroy
+#define plait_element_tree_pairs portable_tree_pairs
+#define plait_element_tree_pairs_between portable_tree_pairs_between
+#define plait_element_tree_pairs_skipping portable_tree_pairs_skipping
+#define plait_element_tree_piece_pairs portable_tree_piece_pairs
+#define plait_element_tree_query portable_tree_query
+#define plait_element_tree_refit portable_tree_refit
+#define plait_element_tree_refit_above portable_tree_refit_above
+#define plait_element_tree_refit_subtree portable_tree_refit_subtree
+#define plait_element_tree_split portable_tree_split
+#undef __SSE2__
+#include "collision/element_tree.c"
