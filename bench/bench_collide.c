@@ -181,6 +181,7 @@ int main(int argc, char **argv)
 			options.stiff = true;
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
 			options.stiff_substeps = atoi(argv[++a]);
+			options.stiff_substeps = options.stiff_substeps > 0 ? options.stiff_substeps : -1;
 		} else if (strcmp(argv[a], "--sphere-slices") == 0 && a + 1 < argc) {
 			options.sphere_slices = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--verbose") == 0) {
@@ -203,8 +204,9 @@ int main(int argc, char **argv)
 			chosen[k] = any = true;
 		}
 	}
-	if (options.stiff_substeps != 0 && !options.stiff) {
-		fprintf(stderr, "bench_collide: --substeps sets the stiff hang-self's substeps; give --stiff too\n");
+	if (options.stiff_substeps < 0 || (options.stiff_substeps != 0 && !options.stiff)) {
+		fprintf(stderr, "bench_collide: --substeps takes a positive count and sets the stiff hang-self's "
+		                "substeps; give --stiff too\n");
 		return 2;
 	}
 	int failures = 0;

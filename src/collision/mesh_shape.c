@@ -253,8 +253,10 @@ static bool boxes_overlap(vec3 al, vec3 au, vec3 bl, vec3 bu)
 	return al.x <= bu.x && bl.x <= au.x && al.y <= bu.y && bl.y <= au.y && al.z <= bu.z && bl.z <= au.z;
 }
 
-void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
-                            plait_triangle_visitor *visit, void *context)
+/* The walk of plait_mesh_shape_visit; with first_only it stops at the first triangle whose own
+ * box overlaps, without visiting it, and says whether there was one (plait_mesh_shape_any). */
+static inline bool walk_boxes(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
+                              plait_triangle_visitor *visit, void *context, bool first_only)
 {
 	int stack[64], depth = 0;
 	stack[depth++] = 0;
@@ -273,6 +275,9 @@ void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 uppe
 						continue;
 					}
 				}
+				if (first_only) {
+					return true;
+				}
 				visit(t, context);
 			}
 		} else if (depth + 2 <= 64) {
@@ -280,31 +285,18 @@ void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 uppe
 			stack[depth++] = n->first;
 		}
 	}
+	return false;
+}
+
+void plait_mesh_shape_visit(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
+                            plait_triangle_visitor *visit, void *context)
+{
+	(void)walk_boxes(shape, lower, upper, test_triangles, visit, context, false);
 }
 
 bool plait_mesh_shape_any(const plait_mesh_shape *shape, vec3 lower, vec3 upper)
 {
-	int stack[64], depth = 0;
-	stack[depth++] = 0;
-	while (depth > 0) {
-		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
-		if (!boxes_overlap(n->lower, n->upper, lower, upper)) {
-			continue;
-		}
-		if (n->count > 0) {
-			for (int k = n->first; k < n->first + n->count; ++k) {
-				vec3 tl, tu;
-				triangle_bounds(shape, shape->triangle_order[k], &tl, &tu);
-				if (boxes_overlap(tl, tu, lower, upper)) {
-					return true;
-				}
-			}
-		} else if (depth + 2 <= 64) {
-			stack[depth++] = n->first + 1;
-			stack[depth++] = n->first;
-		}
-	}
-	return false;
+	return walk_boxes(shape, lower, upper, true, NULL, NULL, true);
 }
 
 static vec3 weighted(vec3 a, vec3 b, vec3 c, float wa, float wb, float wc, float weights[3])
