@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "dynamics/distance_kernel.h"
 #include "test_support.h"
 #include <string.h>
 
@@ -243,6 +244,63 @@ Test(tethers, pins_pulled_apart_stay_finite)
 	}
 	test_grid_free(&grid);
 	plait_destroy_world(world);
+}
+
+/* Pins pulled apart past the cloth's width: a vertex of the pinned edge cannot be within reach of
+ * both, and every vertex on that edge goes through the solver's exact fallback. Each must
+ * still end within its nearest pin's tether (the nearest is projected last), on every
+ * instruction set: a fallback that mixed up a row's two tethers would leave it short of one
+ * and far past the other. */
+Test(tethers, pins_pulled_apart_keep_each_vertex_within_its_nearest_tether)
+{
+	const plait_simd levels[] = {PLAIT_SIMD_SCALAR, PLAIT_SIMD_AVX2, PLAIT_SIMD_AVX512};
+	for (int l = 0; l < 3; ++l) {
+		if (!plait_simd_supported(levels[l])) {
+			continue;
+		}
+		plait_world_def wdef = plait_default_world_def();
+		wdef.simd = levels[l];
+		plait_world_id world = plait_create_world(&wdef, NULL);
+		int n = 20;
+		test_grid grid = test_grid_make(n, n, 1.0f, 1.0f);
+		int pins[2] = {0, n};
+		plait_cloth_def def = plait_default_cloth_def();
+		def.mesh = test_grid_mesh(&grid);
+		def.pins = pins;
+		def.pin_count = 2;
+		def.tethers = PLAIT_TETHER_EUCLIDEAN;
+		plait_error error;
+		plait_object_id cloth = plait_create_cloth(world, &def, &error);
+		cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+		plait_vec3 left = grid.positions[pins[0]], right = grid.positions[pins[1]];
+		for (int frame = 0; frame < 12; ++frame) {
+			float spread = 0.01f * (float)(frame < 6 ? frame + 1 : 6); /* then held 6 cm apart */
+			cr_assert_eq(plait_object_set_pin_target(cloth, pins[0],
+			                                         (plait_vec3){left.x - spread, left.y, left.z}, &error),
+			             PLAIT_OK);
+			cr_assert_eq(plait_object_set_pin_target(
+			                 cloth, pins[1], (plait_vec3){right.x + spread, right.y, right.z}, &error),
+			             PLAIT_OK);
+			cr_assert(test_step_frames(world, 1));
+		}
+		int count = grid.vertex_count;
+		plait_vec3 *x = malloc(sizeof *x * (size_t)count);
+		plait_object_get_positions(cloth, 0, count, x, NULL);
+		for (int v = 0; v < count; ++v) {
+			if (v == pins[0] || v == pins[1]) {
+				continue;
+			}
+			float rest0 = v3len(grid.positions[v], left), rest1 = v3len(grid.positions[v], right);
+			/* Equally near both (the middle column): either may be the one projected last. */
+			double ratio0 = v3len(x[v], x[pins[0]]) / rest0, ratio1 = v3len(x[v], x[pins[1]]) / rest1;
+			double nearest = rest0 < rest1 ? ratio0 : rest1 < rest0 ? ratio1 : fmin(ratio0, ratio1);
+			cr_assert_leq(nearest, 1.0 + 1e-4, "simd %d: vertex %d at %g times its nearest tether",
+			              (int)levels[l], v, nearest);
+		}
+		free(x);
+		test_grid_free(&grid);
+		plait_destroy_world(world);
+	}
 }
 
 Test(tethers, bad_parameters_are_rejected)

@@ -144,26 +144,33 @@ static bool nearest_in_balls(vec3 point, const ball *balls, int count, vec3 *out
 	return best_distance_sq < INFINITY;
 }
 
-/* Pulls a particle back within tether c's length of its anchor; returns whether it moved. */
-static bool project_tether(const plait_tether_block *block, plait_point *points, int c)
+/* Pulls p back within `length` of anchor, by `stiffness` of the excess; returns whether it
+ * moved. */
+static bool pull_within(plait_point *p, plait_point *anchor, float length, float stiffness)
 {
-	plait_point *p = &points[block->pair[c][0]], *anchor = &points[block->pair[c][1]];
 	float w_sum = p->w + anchor->w;
 	if (w_sum == 0.0f) {
 		return false;
 	}
 	vec3 d = v3_sub(p->x, anchor->x);
-	float length = sqrtf(v3_length_sq(d));
-	float excess = length - block->length[c];
+	float distance = sqrtf(v3_length_sq(d));
+	float excess = distance - length;
 	if (excess <= 0.0f) {
 		return false;
 	}
-	vec3 correction = v3_scale(d, block->stiffness[c] * excess / (length * w_sum));
+	vec3 correction = v3_scale(d, stiffness * excess / (distance * w_sum));
 	p->x = v3_mul_add(p->x, -p->w, correction);
 	if (anchor->w != 0.0f) {
 		anchor->x = v3_mul_add(anchor->x, anchor->w, correction);
 	}
 	return true;
+}
+
+/* Pulls a particle back within tether c's length of its anchor; returns whether it moved. */
+static bool project_tether(const plait_tether_block *block, plait_point *points, int c)
+{
+	return pull_within(&points[block->pair[c][0]], &points[block->pair[c][1]], block->length[c],
+	                   block->stiffness[c]);
 }
 
 /* The tethers [first, end) of one particle, with anchors that do not move (pins). */
@@ -185,6 +192,25 @@ static __attribute__((noinline)) void project_row_exactly(const plait_tether_blo
 		for (int c = first; c < end; ++c) {
 			project_tether(block, points, c);
 		}
+	}
+}
+
+/* project_row_exactly for a row of two in the lanes, from the lanes' own copy of it: the
+ * block's arrays, read at rows scattered over them, cost a cache miss each at hang-512. The
+ * same balls in the same order, so the same bits. */
+static __attribute__((noinline)) void project_pair_exactly(plait_point *points, int particle,
+                                                           const int anchor[2], float length0, float length1,
+                                                           float stiffness)
+{
+	plait_point *p = &points[particle];
+	ball balls[2] = {{d3(points[anchor[0]].x), length0}, {d3(points[anchor[1]].x), length1}};
+	vec3 target;
+	if (nearest_in_balls(p->x, balls, 2, &target)) {
+		p->x = v3_lerp(p->x, target, stiffness);
+	} else {
+		/* A row's tethers share their cloth's stiffness. */
+		pull_within(p, &points[anchor[0]], length0, stiffness);
+		pull_within(p, &points[anchor[1]], length1, stiffness);
 	}
 }
 
@@ -247,7 +273,6 @@ typedef struct tether_run {
 typedef struct plait_tether_lanes {
 	int count; /* rows of two */
 	int *particle;
-	int *first; /* the row's first tether in the block, for project_row_exactly */
 	float *length[2];
 	float *stiffness;
 	int run_count;
@@ -265,7 +290,6 @@ void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator
 		return;
 	}
 	plait_free(allocator, lanes->particle);
-	plait_free(allocator, lanes->first);
 	plait_free(allocator, lanes->length[0]);
 	plait_free(allocator, lanes->length[1]);
 	plait_free(allocator, lanes->stiffness);
@@ -331,7 +355,6 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 	size_t n = (size_t)(rows > 0 ? rows : 1), m = (size_t)(other_tethers > 0 ? other_tethers : 1);
 	row_key *keys = plait_alloc_zero(a, n, sizeof *keys);
 	lanes->particle = plait_alloc_zero(a, n, sizeof(int));
-	lanes->first = plait_alloc_zero(a, n, sizeof(int));
 	lanes->length[0] = plait_alloc_zero(a, n, sizeof(float));
 	lanes->length[1] = plait_alloc_zero(a, n, sizeof(float));
 	lanes->stiffness = plait_alloc_zero(a, n, sizeof(float));
@@ -340,10 +363,9 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 	lanes->others.length = plait_alloc_zero(a, m, sizeof(float));
 	lanes->others.stiffness = plait_alloc_zero(a, m, sizeof(float));
 	lanes->anchors = plait_alloc_zero(a, (size_t)(block->count > 0 ? block->count : 1), sizeof(int));
-	if (lanes->anchors == NULL || keys == NULL || lanes->particle == NULL || lanes->first == NULL ||
-	    lanes->length[0] == NULL || lanes->length[1] == NULL || lanes->stiffness == NULL ||
-	    lanes->runs == NULL || lanes->others.pair == NULL || lanes->others.length == NULL ||
-	    lanes->others.stiffness == NULL) {
+	if (lanes->anchors == NULL || keys == NULL || lanes->particle == NULL || lanes->length[0] == NULL ||
+	    lanes->length[1] == NULL || lanes->stiffness == NULL || lanes->runs == NULL ||
+	    lanes->others.pair == NULL || lanes->others.length == NULL || lanes->others.stiffness == NULL) {
 		plait_free(a, keys);
 		plait_tether_lanes_destroy(block, a);
 		return false;
@@ -383,7 +405,6 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 	for (int r = 0; r < rows; ++r) {
 		int first = keys[r].first;
 		lanes->particle[r] = keys[r].particle;
-		lanes->first[r] = first;
 		lanes->length[0][r] = block->length[first];
 		lanes->length[1][r] = block->length[first + 1];
 		lanes->stiffness[r] = block->stiffness[first];
@@ -520,8 +541,9 @@ static void lane_range(void *context, int begin, int end)
 				                                         lanes->length[1] + b, lanes->stiffness + b, a0, a1,
 				                                         count, (float)INSIDE_TOLERANCE, unfound);
 				for (int m = 0; m < missing; ++m) {
-					int first = lanes->first[b + unfound[m]];
-					project_row_exactly(block, points, first, first + 2);
+					int row = b + unfound[m];
+					project_pair_exactly(points, lanes->particle[row], run->anchor, lanes->length[0][row],
+					                     lanes->length[1][row], lanes->stiffness[row]);
 				}
 			}
 			continue;
@@ -554,7 +576,8 @@ static void lane_range(void *context, int begin, int end)
 					plait_store_point(&points[particle[k]], batch.qx[t], batch.qy[t], batch.qz[t],
 					                  batch.w[k]);
 				} else {
-					project_row_exactly(block, points, lanes->first[b + k], lanes->first[b + k] + 2);
+					project_pair_exactly(points, particle[k], run->anchor, length0[k], length1[k],
+					                     lanes->stiffness[b + k]);
 				}
 			}
 		}
