@@ -267,14 +267,14 @@ static inline void project_row(const plait_tether_block *block, plait_point *poi
  * are copied into a block of their own, solved as before. */
 typedef struct tether_run {
 	int anchor[2];
-	int begin, end; /* its rows */
+	float stiffness; /* its rows' (their cloth's) */
+	int begin, end;  /* its rows */
 } tether_run;
 
 typedef struct plait_tether_lanes {
 	int count; /* rows of two */
 	int *particle;
 	float *length[2];
-	float *stiffness;
 	int run_count;
 	tether_run *runs;
 	plait_tether_block others; /* the rows not of two (no lanes of its own) */
@@ -292,7 +292,6 @@ void plait_tether_lanes_destroy(plait_tether_block *block, const plait_allocator
 	plait_free(allocator, lanes->particle);
 	plait_free(allocator, lanes->length[0]);
 	plait_free(allocator, lanes->length[1]);
-	plait_free(allocator, lanes->stiffness);
 	plait_free(allocator, lanes->runs);
 	plait_free(allocator, lanes->others.pair);
 	plait_free(allocator, lanes->others.length);
@@ -357,15 +356,14 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 	lanes->particle = plait_alloc_zero(a, n, sizeof(int));
 	lanes->length[0] = plait_alloc_zero(a, n, sizeof(float));
 	lanes->length[1] = plait_alloc_zero(a, n, sizeof(float));
-	lanes->stiffness = plait_alloc_zero(a, n, sizeof(float));
 	lanes->runs = plait_alloc_zero(a, n, sizeof(tether_run));
 	lanes->others.pair = plait_alloc_zero(a, m, sizeof *lanes->others.pair);
 	lanes->others.length = plait_alloc_zero(a, m, sizeof(float));
 	lanes->others.stiffness = plait_alloc_zero(a, m, sizeof(float));
 	lanes->anchors = plait_alloc_zero(a, (size_t)(block->count > 0 ? block->count : 1), sizeof(int));
 	if (lanes->anchors == NULL || keys == NULL || lanes->particle == NULL || lanes->length[0] == NULL ||
-	    lanes->length[1] == NULL || lanes->stiffness == NULL || lanes->runs == NULL ||
-	    lanes->others.pair == NULL || lanes->others.length == NULL || lanes->others.stiffness == NULL) {
+	    lanes->length[1] == NULL || lanes->runs == NULL || lanes->others.pair == NULL ||
+	    lanes->others.length == NULL || lanes->others.stiffness == NULL) {
 		plait_free(a, keys);
 		plait_tether_lanes_destroy(block, a);
 		return false;
@@ -407,10 +405,12 @@ static bool derive_lanes(plait_tether_block *block, const plait_allocator *a)
 		lanes->particle[r] = keys[r].particle;
 		lanes->length[0][r] = block->length[first];
 		lanes->length[1][r] = block->length[first + 1];
-		lanes->stiffness[r] = block->stiffness[first];
+		/* A run's rows share their anchors and their stiffness (a cloth's pins tether only
+		 * that cloth, whose tethers share one stiffness; rows that did not would start a run). */
+		float stiffness = block->stiffness[first];
 		if (r == 0 || keys[r].anchor[0] != keys[r - 1].anchor[0] ||
-		    keys[r].anchor[1] != keys[r - 1].anchor[1]) {
-			lanes->runs[runs++] = (tether_run){{keys[r].anchor[0], keys[r].anchor[1]}, r, r};
+		    keys[r].anchor[1] != keys[r - 1].anchor[1] || stiffness != lanes->runs[runs - 1].stiffness) {
+			lanes->runs[runs++] = (tether_run){{keys[r].anchor[0], keys[r].anchor[1]}, stiffness, r, r};
 		}
 		lanes->runs[runs - 1].end = r + 1;
 	}
@@ -535,15 +535,15 @@ static void lane_range(void *context, int begin, int end)
 				int unfound[LANE_BATCH];
 				int missing =
 				    job->avx512 ? plait_tether_rows_avx512(points, lanes->particle + b, lanes->length[0] + b,
-				                                           lanes->length[1] + b, lanes->stiffness + b, a0, a1,
+				                                           lanes->length[1] + b, run->stiffness, a0, a1,
 				                                           count, (float)INSIDE_TOLERANCE, unfound)
 				                : plait_tether_rows_avx2(points, lanes->particle + b, lanes->length[0] + b,
-				                                         lanes->length[1] + b, lanes->stiffness + b, a0, a1,
-				                                         count, (float)INSIDE_TOLERANCE, unfound);
+				                                         lanes->length[1] + b, run->stiffness, a0, a1, count,
+				                                         (float)INSIDE_TOLERANCE, unfound);
 				for (int m = 0; m < missing; ++m) {
 					int row = b + unfound[m];
 					project_pair_exactly(points, lanes->particle[row], run->anchor, lanes->length[0][row],
-					                     lanes->length[1][row], lanes->stiffness[row]);
+					                     lanes->length[1][row], run->stiffness);
 				}
 			}
 			continue;
@@ -566,7 +566,7 @@ static void lane_range(void *context, int begin, int end)
 				batch.tz[taut] = batch.pz[k];
 				batch.length[0][taut] = length0[k];
 				batch.length[1][taut] = length1[k];
-				batch.stiffness[taut] = lanes->stiffness[b + k];
+				batch.stiffness[taut] = run->stiffness;
 				taut += batch.taut[k];
 			}
 			solve_taut(&batch, a0, a1, taut);
@@ -577,7 +577,7 @@ static void lane_range(void *context, int begin, int end)
 					                  batch.w[k]);
 				} else {
 					project_pair_exactly(points, particle[k], run->anchor, length0[k], length1[k],
-					                     lanes->stiffness[b + k]);
+					                     run->stiffness);
 				}
 			}
 		}

@@ -67,12 +67,12 @@ static inline __m256 load_rows(const float *from, int count, __m256i lanes)
 }
 
 int plait_tether_rows_avx2(plait_point *points, const int *particle, const float *length0,
-                           const float *length1, const float *stiffness, vec3 anchor0, vec3 anchor1,
-                           int count, float tolerance, int *unfound)
+                           const float *length1, float stiffness, vec3 anchor0, vec3 anchor1, int count,
+                           float tolerance, int *unfound)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), half = _mm256_set1_ps(0.5f);
 	const __m256 tiny = _mm256_set1_ps(1e-12f), negative_zero = _mm256_set1_ps(-0.0f);
-	const __m256 reach_scale = _mm256_set1_ps(1.0f + tolerance);
+	const __m256 reach_scale = _mm256_set1_ps(1.0f + tolerance), t = _mm256_set1_ps(stiffness);
 	const lanes3 a0 = broadcast3(anchor0), a1 = broadcast3(anchor1);
 	/* The axis between the pins is a1 - a0 or a0 - a1 in every lane, the same square either way:
 	 * its inverse once, not once a group (one division of the nine). */
@@ -113,7 +113,6 @@ int plait_tether_rows_avx2(plait_point *points, const int *particle, const float
 		lanes3 d = select3(first_worst, d0, d1);
 		lanes3 projected = mul_add3(wa, _mm256_div_ps(w_length, select1(first_worst, r0, r1)), d);
 		__m256 within = within_reach8(projected, oa, o_length, reach_scale);
-		__m256 t = load_rows(stiffness + b, n, lanes);
 		if (_mm256_movemask_ps(_mm256_andnot_ps(_mm256_or_ps(none, within), taut)) == 0) {
 			/* Every taut row's worst tether, pulled in, leaves it inside the other one (about
 			 * half the groups of a hanging cloth): the other candidates would not be chosen. */

@@ -65,12 +65,12 @@ static inline __mmask16 within_reach16(lanes3 q, lanes3 anchor, __m512 length, _
 }
 
 int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
-                             const float *length1, const float *stiffness, vec3 anchor0, vec3 anchor1,
-                             int count, float tolerance, int *unfound)
+                             const float *length1, float stiffness, vec3 anchor0, vec3 anchor1, int count,
+                             float tolerance, int *unfound)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f);
 	const __m512 tiny = _mm512_set1_ps(1e-12f), negative_zero = _mm512_set1_ps(-0.0f);
-	const __m512 reach_scale = _mm512_set1_ps(1.0f + tolerance);
+	const __m512 reach_scale = _mm512_set1_ps(1.0f + tolerance), t = _mm512_set1_ps(stiffness);
 	const lanes3 a0 = broadcast3(anchor0), a1 = broadcast3(anchor1);
 	/* As in tether_avx2.c: the axis's inverse square once. */
 	const lanes3 axis01 = sub3(a1, a0);
@@ -110,7 +110,6 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		lanes3 d = select3(first_worst, d0, d1);
 		lanes3 projected = mul_add3(wa, _mm512_div_ps(w_length, select1(first_worst, r0, r1)), d);
 		__mmask16 within = within_reach16(projected, oa, o_length, reach_scale);
-		__m512 t = _mm512_maskz_loadu_ps(lanes, stiffness + b);
 		if ((taut & (__mmask16) ~(none | within)) == 0) {
 			/* Every taut row ends inside its other tether (tether_avx2.c). */
 			lanes3 q = select3(none, p, mul_add3(p, t, sub3(projected, p)));
