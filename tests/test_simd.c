@@ -273,8 +273,10 @@ Test(simd, runs_and_regions_share_no_particle)
 /* Two cloths, one tethered and pinned, one falling onto it, over a sphere; with air, and
  * without (then the velocity update and the next prediction run as one pass, particle_avx2.c),
  * with damping and a bouncy, sticky sphere so that the pass's rare lanes (pinned particles,
- * contacts) are taken too. */
-static void run_instruction_set_scene(bool air)
+ * contacts) are taken too. With shared_damping every material damps alike, and the particle
+ * passes take one factor for all; without, the second cloth damps more, and they look each
+ * particle's material up. */
+static void run_instruction_set_scene(bool air, bool shared_damping)
 {
 	test_grid grid = test_grid_make(40, 40, 2.0f, 2.0f);
 	plait_vec3 *reference = malloc(sizeof *reference * (size_t)(2 * grid.vertex_count));
@@ -299,6 +301,7 @@ static void run_instruction_set_scene(bool air)
 		doomed_def.mesh = test_grid_mesh(&small);
 		doomed_def.stretch_resistance = doomed_def.compression_resistance = 10000.0f;
 		doomed_def.bend_model = PLAIT_BEND_DISTANCE;
+		doomed_def.damp = 0.5f;
 		plait_object_id doomed = plait_create_cloth(world, &doomed_def, NULL);
 		test_grid_free(&small);
 		cr_assert(!plait_object_id_is_null(doomed));
@@ -327,6 +330,7 @@ static void run_instruction_set_scene(bool air)
 		folded.tethers = PLAIT_TETHER_NONE;
 		folded.pins = NULL;
 		folded.pin_count = 0;
+		folded.damp = shared_damping ? def.damp : 1.5f;
 		plait_object_id second = plait_create_cloth(world, &folded, NULL);
 		free(lifted);
 		cr_assert(!plait_object_id_is_null(second));
@@ -345,9 +349,10 @@ static void run_instruction_set_scene(bool air)
 		if (l == 0) {
 			memcpy(reference, positions, sizeof *reference * (size_t)(2 * grid.vertex_count));
 		} else {
-			cr_assert(memcmp(reference, positions, sizeof *reference * (size_t)(2 * grid.vertex_count)) == 0,
-			          "simd level %d gave other positions than the portable kernel (air %d)", (int)levels[l],
-			          (int)air);
+			cr_assert(
+			    memcmp(reference, positions, sizeof *reference * (size_t)(2 * grid.vertex_count)) == 0,
+			    "simd level %d gave other positions than the portable kernel (air %d, shared damping %d)",
+			    (int)levels[l], (int)air, (int)shared_damping);
 		}
 		plait_destroy_world(world);
 	}
@@ -358,12 +363,17 @@ static void run_instruction_set_scene(bool air)
 
 Test(simd, a_simulation_is_byte_identical_with_every_instruction_set)
 {
-	run_instruction_set_scene(true);
+	run_instruction_set_scene(true, false);
 }
 
 Test(simd, a_simulation_without_air_is_byte_identical_with_every_instruction_set)
 {
-	run_instruction_set_scene(false);
+	run_instruction_set_scene(false, true);
+}
+
+Test(simd, materials_damping_apart_give_the_same_bytes_with_every_instruction_set)
+{
+	run_instruction_set_scene(false, false);
 }
 
 Test(simd, asking_for_a_level_the_processor_lacks_is_an_error)

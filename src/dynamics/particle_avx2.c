@@ -53,6 +53,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	 * stride in floats (the struct has int members, so its size is a multiple of 4). */
 	const float *damp_factor = &k->materials[0].damp_factor;
 	const __m256i material_stride = _mm256_set1_epi32((int)(sizeof(plait_material) / sizeof(float)));
+	const __m256 shared_factor = _mm256_set1_ps(k->shared_damp_factor);
 	const uint64_t contact_bits = 0x0101010101010101ull * PLAIT_PARTICLE_CONTACT;
 	const uint64_t kept_bits =
 	    0x0101010101010101ull *
@@ -116,8 +117,11 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 		flags = (flags & kept_bits) | ((flags & on_plane_bits) >> 1);
 		memcpy(p->flags + i, &flags, sizeof flags);
 		store_vec3x8(p->x_prev + i, x, y, z);
-		__m256i material = _mm256_loadu_si256((const __m256i *)(p->material + i));
-		__m256 factor = _mm256_i32gather_ps(damp_factor, _mm256_mullo_epi32(material, material_stride), 4);
+		__m256 factor = shared_factor;
+		if (!k->damp_shared) {
+			__m256i material = _mm256_loadu_si256((const __m256i *)(p->material + i));
+			factor = _mm256_i32gather_ps(damp_factor, _mm256_mullo_epi32(material, material_stride), 4);
+		}
 		vx = _mm256_mul_ps(_mm256_add_ps(vx, _mm256_mul_ps(h, gx)), factor);
 		vy = _mm256_mul_ps(_mm256_add_ps(vy, _mm256_mul_ps(h, gy)), factor);
 		vz = _mm256_mul_ps(_mm256_add_ps(vz, _mm256_mul_ps(h, gz)), factor);

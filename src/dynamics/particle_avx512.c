@@ -22,6 +22,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	/* Materials are read for their damping factor, as floats (particle_avx2.c). */
 	const float *damp_factor = &k->materials[0].damp_factor;
 	const __m512i material_stride = _mm512_set1_epi32((int)(sizeof(plait_material) / sizeof(float)));
+	const __m512 shared_factor = _mm512_set1_ps(k->shared_damp_factor);
 	const uint64_t contact_bits = 0x0101010101010101ull * PLAIT_PARTICLE_CONTACT;
 	const uint64_t kept_bits =
 	    0x0101010101010101ull *
@@ -80,8 +81,11 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 		}
 		memcpy(p->flags + i, flags, sizeof flags);
 		store_vec3x16(p->x_prev + i, x, y, z);
-		__m512i material = _mm512_loadu_si512((const void *)(p->material + i));
-		__m512 factor = _mm512_i32gather_ps(_mm512_mullo_epi32(material, material_stride), damp_factor, 4);
+		__m512 factor = shared_factor;
+		if (!k->damp_shared) {
+			__m512i material = _mm512_loadu_si512((const void *)(p->material + i));
+			factor = _mm512_i32gather_ps(_mm512_mullo_epi32(material, material_stride), damp_factor, 4);
+		}
 		vx = _mm512_mul_ps(_mm512_add_ps(vx, _mm512_mul_ps(h, gx)), factor);
 		vy = _mm512_mul_ps(_mm512_add_ps(vy, _mm512_mul_ps(h, gy)), factor);
 		vz = _mm512_mul_ps(_mm512_add_ps(vz, _mm512_mul_ps(h, gz)), factor);

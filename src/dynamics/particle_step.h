@@ -16,6 +16,8 @@ typedef struct plait_particle_step {
 	vec3 gravity, half_gravity_step;
 	bool air;
 	const plait_material *materials;
+	bool damp_shared; /* every material's damp_factor is shared_damp_factor */
+	float shared_damp_factor;
 } plait_particle_step;
 
 /* Start of a substep for particle i: its velocity takes gravity and damping (air, when on, has
@@ -40,7 +42,8 @@ static inline void plait_begin_particle(const plait_particle_step *k, plait_part
 	}
 	/* Without air, plait_integrate_velocities in the same pass: gravity and damping. */
 	if (!k->air) {
-		p->v[i] = v3_scale(v3_mul_add(p->v[i], k->h, k->gravity), k->materials[p->material[i]].damp_factor);
+		float damp_factor = k->damp_shared ? k->shared_damp_factor : k->materials[p->material[i]].damp_factor;
+		p->v[i] = v3_scale(v3_mul_add(p->v[i], k->h, k->gravity), damp_factor);
 	}
 	p->point[i].x = v3_mul_add(p->point[i].x, k->h, v3_sub(p->v[i], k->half_gravity_step));
 }

@@ -267,6 +267,10 @@ typedef struct plait_sim {
 	plait_particles particles;
 	int material_count, material_capacity;
 	plait_material *materials;
+	/* Whether every material has the same damp_factor this frame, and that factor: the
+	 * particle passes then need not read each particle's material. */
+	bool damp_shared;
+	float shared_damp_factor;
 	plait_distance_block stretch, shear;
 	plait_distance_block bend_distance; /* bend as distances across vertices (PLAIT_BEND_DISTANCE) */
 	plait_bend_block bend;

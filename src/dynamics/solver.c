@@ -85,10 +85,16 @@ typedef struct particle_job {
 static plait_particle_step step_of(const particle_job *job)
 {
 	vec3 gravity = job->sim->settings.gravity;
-	return (plait_particle_step){job->h,     1.0f / job->h,
-	                             job->t_end, job->resting_speed,
-	                             gravity,    v3_scale(gravity, 0.5f * job->h),
-	                             job->air,   job->sim->materials};
+	return (plait_particle_step){job->h,
+	                             1.0f / job->h,
+	                             job->t_end,
+	                             job->resting_speed,
+	                             gravity,
+	                             v3_scale(gravity, 0.5f * job->h),
+	                             job->air,
+	                             job->sim->materials,
+	                             job->sim->damp_shared,
+	                             job->sim->shared_damp_factor};
 }
 
 /* The end of a substep (`ending`: the velocity update) and the start of the next (`beginning`:
@@ -326,6 +332,11 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 	for (int m = 0; m < sim->material_count; ++m) {
 		float damp = sim->materials[m].damp;
 		sim->materials[m].damp_factor = damp > 0.0f ? expf(-damp * h) : 1.0f;
+	}
+	sim->damp_shared = sim->material_count > 0;
+	sim->shared_damp_factor = sim->material_count > 0 ? sim->materials[0].damp_factor : 1.0f;
+	for (int m = 1; m < sim->material_count; ++m) {
+		sim->damp_shared = sim->damp_shared && sim->materials[m].damp_factor == sim->shared_damp_factor;
 	}
 	bool begun = false; /* the particles' part of this substep's start is done */
 	for (int s = 0; s < substeps; ++s) {
