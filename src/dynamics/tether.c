@@ -179,7 +179,7 @@ static __attribute__((noinline)) void project_row_exactly(const plait_tether_blo
                                                           plait_point *points, int first, int end)
 {
 	plait_point *p = &points[block->pair[first][0]];
-	ball balls[MAX_ROW];
+	ball balls[MAX_ROW] = {0}; /* only the first count, written below, are read */
 	int count = 0;
 	for (int c = first; c < end; ++c) {
 		balls[count++] = (ball){d3(points[block->pair[c][1]].x), block->length[c]};
