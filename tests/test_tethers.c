@@ -36,7 +36,7 @@ static float fourth_nearest(const plait_vec3 *rest, int v, const int *pins, int 
 	return nearest[3];
 }
 
-static void hang_from(const int *pins, int pin_count, plait_tether_mode mode, float scale,
+static void hang_with(const int *pins, int pin_count, plait_tether_mode mode, float scale, float stiffness,
                       double *worst_ratio, double *max_stretch)
 {
 	plait_world_def wdef = plait_default_world_def();
@@ -62,6 +62,7 @@ static void hang_from(const int *pins, int pin_count, plait_tether_mode mode, fl
 	def.pin_count = pin_count;
 	def.tethers = mode;
 	def.tether_scale = scale;
+	def.tether_stiffness = stiffness;
 	plait_error error;
 	plait_object_id cloth = plait_create_cloth(world, &def, &error);
 	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
@@ -102,6 +103,12 @@ static void hang_from(const int *pins, int pin_count, plait_tether_mode mode, fl
 	plait_destroy_world(world);
 }
 
+static void hang_from(const int *pins, int pin_count, plait_tether_mode mode, float scale,
+                      double *worst_ratio, double *max_stretch)
+{
+	hang_with(pins, pin_count, mode, scale, 1.0f, worst_ratio, max_stretch);
+}
+
 /* Hung from its two top corners. */
 static void hang(plait_tether_mode mode, float scale, double *worst_ratio, double *max_stretch)
 {
@@ -134,6 +141,26 @@ Test(tethers, hold_a_heavy_hanging_cloth_to_its_rest_reach)
 	/* Tied to one pin each, vertices either side of the middle were pulled towards opposite
 	 * corners and the edges between them torn to 1.79 times their length. */
 	cr_assert_lt(stretch_tethered, 0.25);
+}
+
+/* A stiffness under 1 removes only that share of a tether's excess a pass: the cloth then hangs
+ * past its tethers, farther the softer they are (the rows of two are solved in vector lanes
+ * with one stiffness per run: a kernel that lost it would hold every cloth alike). */
+Test(tethers, softer_tethers_let_the_cloth_hang_farther)
+{
+	int pins[2] = {0, 20};
+	double ratio[3], stretch;
+	const float stiffness[3] = {1.0f, 0.5f, 0.1f};
+	for (int k = 0; k < 3; ++k) {
+		hang_with(pins, 2, PLAIT_TETHER_EUCLIDEAN, 1.0f, stiffness[k], &ratio[k], &stretch);
+	}
+	cr_log_info("worst pin distance ratio at stiffness 1, 0.5, 0.1: %.5f %.5f %.5f", ratio[0], ratio[1],
+	            ratio[2]);
+	cr_assert_leq(ratio[0], 1.0001);
+	cr_assert_gt(ratio[1], ratio[0] + 1e-4, "stiffness 0.5 held as tightly as 1 (%g, %g)", ratio[1],
+	             ratio[0]);
+	cr_assert_gt(ratio[2], ratio[1] + 1e-4, "stiffness 0.1 held as tightly as 0.5 (%g, %g)", ratio[2],
+	             ratio[1]);
 }
 
 Test(tethers, three_pins_hold_every_tether)

@@ -174,6 +174,8 @@ typedef struct plait_tether_block {
 	int count, capacity;
 	int (*pair)[2];
 	float *length;
+	/* Per tether, but the same for all of a cloth's (world/tethers.c): the solver takes a
+	 * particle's tethers together with the first one's (tether.c). */
 	float *stiffness;
 	bool fixed_anchors;               /* every anchor pinned: set at each frame's start (plait_sim_step) */
 	bool still_anchors;               /* and none moves in the frame (its point is its pin's start and end) */
@@ -267,8 +269,9 @@ typedef struct plait_sim {
 	plait_particles particles;
 	int material_count, material_capacity;
 	plait_material *materials;
-	/* Whether every material has the same damp_factor this frame, and that factor: the
-	 * particle passes then need not read each particle's material. */
+	/* Whether every material of free particles (all but colliders') has the same damp_factor
+	 * this frame, and that factor: the particle passes then need not read each particle's
+	 * material. Materials of destroyed objects stay and still count. */
 	bool damp_shared;
 	float shared_damp_factor;
 	plait_distance_block stretch, shear;

@@ -333,9 +333,19 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		float damp = sim->materials[m].damp;
 		sim->materials[m].damp_factor = damp > 0.0f ? expf(-damp * h) : 1.0f;
 	}
-	sim->damp_shared = sim->material_count > 0;
-	sim->shared_damp_factor = sim->material_count > 0 ? sim->materials[0].damp_factor : 1.0f;
-	for (int m = 1; m < sim->material_count; ++m) {
+	/* Colliders' particles are always pinned, and pinned particles are never damped: their
+	 * materials (no damping) do not count. */
+	sim->damp_shared = true;
+	sim->shared_damp_factor = 1.0f;
+	bool seen = false;
+	for (int m = 0; m < sim->material_count; ++m) {
+		if (sim->materials[m].type == PLAIT_OBJECT_COLLIDER) {
+			continue;
+		}
+		if (!seen) {
+			sim->shared_damp_factor = sim->materials[m].damp_factor;
+			seen = true;
+		}
 		sim->damp_shared = sim->damp_shared && sim->materials[m].damp_factor == sim->shared_damp_factor;
 	}
 	bool begun = false; /* the particles' part of this substep's start is done */
