@@ -21,8 +21,8 @@
  * `parallel` (NULL: on the calling thread), with the same results on any number. Costs grow
  * with the faces within range of each feature: on one thread the first step of bench_collide
  * hang-self (16 mm cloth triangles over a sphere of radius 0.5) takes 0.16 s with a 4,900-
- * triangle sphere, 0.97 s with 20,000 triangles and 12.7 s with 80,000 (--sphere-slices 50,
- * 100, 200), most of it here. */
+ * triangle sphere, about 1 s with 20,000 triangles and 10 s with 80,000 (--sphere-slices 50,
+ * 100, 200; 12 s before the samples' radix sort), most of it here. */
 bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *allocator,
                                plait_parallel *parallel, float budget, float range, float *vertex_reach,
                                float *edge_reach);
