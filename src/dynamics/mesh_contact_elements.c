@@ -139,6 +139,38 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 		points += !in_surface[i] && (p->flags[i] & PLAIT_PARTICLE_COLLIDE) &&
 		          material_collides(sim, p->material[i]);
 	}
+	/* One object that does not collide with itself meets nothing here: its contacts with
+	 * colliders are the particle pass's (contact.c). The objects are counted first, as the
+	 * loops below make them, so that a lone cloth costs no elements (sorting a 512 x 512
+	 * cloth's edges was most of its first frame). */
+	int planned = 0, last_material = -1;
+	bool only_self = false;
+	for (int s = 0; s < sim->surface_count; ++s) {
+		if (material_collides(sim, sim->surfaces[s].material)) {
+			planned += 1;
+			last_material = sim->surfaces[s].material;
+			only_self = sim->materials[last_material].self_collide;
+		}
+	}
+	for (int c = 0; c < sim->chain_count; ++c) {
+		if (material_collides(sim, sim->chains[c].material) && sim->chains[c].count >= 2) {
+			planned += 1;
+			last_material = sim->chains[c].material;
+			only_self = sim->materials[last_material].self_collide;
+		}
+	}
+	for (int i = 0; i < p->count && planned < 2; ++i) {
+		if (!in_surface[i] && (p->flags[i] & PLAIT_PARTICLE_COLLIDE) &&
+		    material_collides(sim, p->material[i]) && (planned == 0 || p->material[i] != last_material)) {
+			planned += 1;
+			last_material = p->material[i];
+			only_self = false; /* loose points never meet their own kind here */
+		}
+	}
+	if (!(planned > 1 || (planned == 1 && only_self))) {
+		plait_free(a, in_surface);
+		return true;
+	}
 	int count = triangles + segments + points;
 	mc->elements = plait_alloc_zero(a, (size_t)count, sizeof *mc->elements);
 	mc->element_reach = plait_alloc_zero(a, (size_t)count, sizeof(float));
