@@ -4,7 +4,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "dynamics/distance_kernel.h"
 #include "test_support.h"
 #include <string.h>
 
@@ -242,20 +241,28 @@ Test(tethers, hold_after_another_cloth_is_destroyed)
 
 /* Pins pulled apart past the cloth's reach leave the tethers without a common point: the
  * solver must stay finite and keep each vertex within reach of its nearest pin. */
-Test(tethers, pins_pulled_apart_stay_finite)
+/* A cloth of the grid held at two pins by Euclidean tethers. */
+static plait_object_id two_pin_cloth(plait_world_id world, test_grid *grid, const int pins[2])
 {
-	plait_world_def wdef = plait_default_world_def();
-	plait_world_id world = plait_create_world(&wdef, NULL);
-	test_grid grid = test_grid_make(10, 10, 1.0f, 1.0f);
-	int pins[2] = {0, 10};
 	plait_cloth_def def = plait_default_cloth_def();
-	def.mesh = test_grid_mesh(&grid);
+	def.mesh = test_grid_mesh(grid);
 	def.pins = pins;
 	def.pin_count = 2;
 	def.tethers = PLAIT_TETHER_EUCLIDEAN;
 	plait_error error;
 	plait_object_id cloth = plait_create_cloth(world, &def, &error);
 	cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
+	return cloth;
+}
+
+Test(tethers, pins_pulled_apart_stay_finite)
+{
+	plait_world_def wdef = plait_default_world_def();
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	test_grid grid = test_grid_make(10, 10, 1.0f, 1.0f);
+	int pins[2] = {0, 10};
+	plait_object_id cloth = two_pin_cloth(world, &grid, pins);
+	plait_error error;
 	for (int frame = 0; frame < 30; ++frame) {
 		float spread = 0.5f + 0.05f * (float)frame;
 		cr_assert_eq(plait_object_set_pin_target(cloth, 0, (plait_vec3){-spread, 0.0f, -0.5f}, &error),
@@ -282,7 +289,7 @@ Test(tethers, pins_pulled_apart_keep_each_vertex_within_its_nearest_tether)
 {
 	const plait_simd levels[] = {PLAIT_SIMD_SCALAR, PLAIT_SIMD_AVX2, PLAIT_SIMD_AVX512};
 	for (int l = 0; l < 3; ++l) {
-		if (!plait_simd_supported(levels[l])) {
+		if (!plait_simd_is_supported(levels[l])) {
 			continue;
 		}
 		plait_world_def wdef = plait_default_world_def();
@@ -291,14 +298,8 @@ Test(tethers, pins_pulled_apart_keep_each_vertex_within_its_nearest_tether)
 		int n = 20;
 		test_grid grid = test_grid_make(n, n, 1.0f, 1.0f);
 		int pins[2] = {0, n};
-		plait_cloth_def def = plait_default_cloth_def();
-		def.mesh = test_grid_mesh(&grid);
-		def.pins = pins;
-		def.pin_count = 2;
-		def.tethers = PLAIT_TETHER_EUCLIDEAN;
+		plait_object_id cloth = two_pin_cloth(world, &grid, pins);
 		plait_error error;
-		plait_object_id cloth = plait_create_cloth(world, &def, &error);
-		cr_assert(!plait_object_id_is_null(cloth), "%s", error.message);
 		plait_vec3 left = grid.positions[pins[0]], right = grid.positions[pins[1]];
 		for (int frame = 0; frame < 12; ++frame) {
 			float spread = 0.01f * (float)(frame < 6 ? frame + 1 : 6); /* then held 6 cm apart */
