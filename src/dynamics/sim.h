@@ -37,12 +37,16 @@ typedef struct plait_material {
 	float point_area;                  /* m^2: cross-section used with point_drag */
 	float drag, tangential_drag, lift; /* cloth triangles */
 	bool collide;
+	bool retired;           /* its object destroyed: no particle refers to it any more */
 	bool self_collide;      /* the object collides with itself */
 	int self_flag;          /* cloth: plait_self_collision_flag */
 	int collider_flag;      /* cloth: plait_collision_flag */
 	float self_width_scale; /* cloth: self-collision thickness / thickness */
 	int collision_layer;    /* see plait_surface_def */
 } plait_material;
+/* The particle passes gather damp_factor by material index times this size in floats. */
+_Static_assert(sizeof(plait_material) % sizeof(float) == 0,
+               "plait_material must be a whole number of floats");
 
 /* A particle's position and inverse mass in one 16-byte record, so that a constraint kernel
  * fetches everything it needs about a vertex with one vector load (and stores it with one). */
@@ -269,9 +273,9 @@ typedef struct plait_sim {
 	plait_particles particles;
 	int material_count, material_capacity;
 	plait_material *materials;
-	/* Whether every material of free particles (all but colliders') has the same damp_factor
-	 * this frame, and that factor: the particle passes then need not read each particle's
-	 * material. Materials of destroyed objects stay and still count. */
+	/* Whether every material of free particles (all but colliders' and destroyed objects') has
+	 * the same damp_factor this frame, and that factor: the particle passes then need not read
+	 * each particle's material. */
 	bool damp_shared;
 	float shared_damp_factor;
 	plait_distance_block stretch, shear;

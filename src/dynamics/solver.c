@@ -334,12 +334,12 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		sim->materials[m].damp_factor = damp > 0.0f ? expf(-damp * h) : 1.0f;
 	}
 	/* Colliders' particles are always pinned, and pinned particles are never damped: their
-	 * materials (no damping) do not count. */
+	 * materials (no damping) do not count, nor do destroyed objects'. */
 	sim->damp_shared = true;
 	sim->shared_damp_factor = 1.0f;
 	bool seen = false;
 	for (int m = 0; m < sim->material_count; ++m) {
-		if (sim->materials[m].type == PLAIT_OBJECT_COLLIDER) {
+		if (sim->materials[m].type == PLAIT_OBJECT_COLLIDER || sim->materials[m].retired) {
 			continue;
 		}
 		if (!seen) {

@@ -97,6 +97,7 @@ void plait_destroy_object(plait_object_id id)
 	if (object->material >= 0) {
 		/* The material slot stays (particles index materials), but takes no part any more. */
 		sim->materials[object->material].collide = false;
+		sim->materials[object->material].retired = true;
 		sim->materials[object->material].drag = 0.0f;
 		sim->materials[object->material].tangential_drag = 0.0f;
 		sim->materials[object->material].lift = 0.0f;
