@@ -239,8 +239,6 @@ Test(tethers, hold_after_another_cloth_is_destroyed)
 	plait_destroy_world(world);
 }
 
-/* Pins pulled apart past the cloth's reach leave the tethers without a common point: the
- * solver must stay finite and keep each vertex within reach of its nearest pin. */
 /* A cloth of the grid held at two pins by Euclidean tethers. */
 static plait_object_id two_pin_cloth(plait_world_id world, test_grid *grid, const int pins[2])
 {
@@ -255,6 +253,8 @@ static plait_object_id two_pin_cloth(plait_world_id world, test_grid *grid, cons
 	return cloth;
 }
 
+/* Pins pulled apart past the cloth's reach leave the tethers without a common point: the
+ * solver must stay finite and keep each vertex within reach of its nearest pin. */
 Test(tethers, pins_pulled_apart_stay_finite)
 {
 	plait_world_def wdef = plait_default_world_def();
