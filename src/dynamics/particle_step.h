@@ -16,7 +16,7 @@ typedef struct plait_particle_step {
 	vec3 gravity, half_gravity_step;
 	bool air;
 	const plait_material *materials;
-	bool damp_shared; /* every material's damp_factor is shared_damp_factor */
+	bool damp_shared; /* every free particle's material damps by shared_damp_factor (solver.c) */
 	float shared_damp_factor;
 } plait_particle_step;
 
