@@ -117,6 +117,101 @@ Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 	}
 }
 
+/* Batches laid out as a grid cloth's colour runs often are, which the vector kernels move with
+ * full-width loads and stores (distance_avx512.c): each 16 constraints a region of 64 points of
+ * its own, taking in turn: two runs of consecutive points (k: a + k, b + k), neighbours in one
+ * run (a + 2k, a + 2k + 1), the two diagonals of a row of quads (2m: a + 2m, b + 2m + 1;
+ * 2m + 1: b + 2m, a + 2m + 1), a shuffled batch, and two runs but for one lane. The count
+ * leaves a tail batch and a remainder. */
+enum { LAYOUT_KINDS = 5, REGION_POINTS = 64 };
+
+static void make_layout_block(plait_distance_block *block, plait_point *points, int count, uint32_t seed,
+                              bool rigid)
+{
+	make_block(block, points, count, seed, rigid);
+	uint32_t state = seed ^ 0x9e3779b9u;
+	for (int c = 0; c < count; ++c) {
+		int batch = c / 16, k = c % 16, m = k / 2, base = REGION_POINTS * batch;
+		int i = 0, j = 0;
+		switch (batch % LAYOUT_KINDS) {
+		case 0: /* two runs */
+			i = base + k;
+			j = base + 32 + k;
+			break;
+		case 1: /* neighbours */
+			i = base + 2 * k;
+			j = base + 2 * k + 1;
+			break;
+		case 2: /* diagonals */
+			i = k % 2 == 0 ? base + 2 * m : base + 32 + 2 * m;
+			j = k % 2 == 0 ? base + 32 + 2 * m + 1 : base + 2 * m + 1;
+			break;
+		case 3: /* shuffled: constraint k joins points 2k and 2k + 1 of a permutation */
+			i = base + (int)((7u * (uint32_t)(2 * k) + 3u) % 32u);
+			j = base + (int)((7u * (uint32_t)(2 * k + 1) + 3u) % 32u);
+			break;
+		default: /* two runs but the last lane */
+			i = base + (k == 15 ? 20 : k);
+			j = base + 32 + k;
+			break;
+		}
+		block->pair[c][0] = i;
+		block->pair[c][1] = j;
+		block->point_offset[c][0] = plait_point_offset(i);
+		block->point_offset[c][1] = plait_point_offset(j);
+	}
+	int point_count = REGION_POINTS * ((count + 15) / 16);
+	for (int i = 0; i < point_count; ++i) {
+		points[i].x =
+		    (plait_vec3){random_unit(&state), random_unit(&state) - 0.5f, 2.0f * random_unit(&state)};
+		points[i].w = next_random(&state) % 8 == 0 ? 0.0f : 0.5f + random_unit(&state);
+	}
+}
+
+Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
+{
+	int counts[] = {16 * LAYOUT_KINDS, 16 * 3 * LAYOUT_KINDS + 7};
+	for (size_t n = 0; n < 2 * sizeof counts / sizeof counts[0]; ++n) {
+		int count = counts[n / 2];
+		bool rigid = n % 2 == 1;
+		size_t point_count = (size_t)(REGION_POINTS * ((count + 15) / 16));
+		size_t bytes = (sizeof(plait_point) * point_count + 63) / 64 * 64;
+		plait_point *reference = malloc(bytes);
+		float *reference_lambda = malloc(sizeof(float) * (size_t)count);
+		for (int l = 0; l < 3; ++l) {
+			if (!plait_simd_supported(levels[l])) {
+				cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
+				continue;
+			}
+			plait_distance_block block;
+			memset(&block, 0, sizeof block);
+			plait_point *points = aligned_alloc(64, bytes);
+			make_layout_block(&block, points, count, 777u + (uint32_t)count, rigid);
+			cr_assert_eq(block.compliant_count == 0, rigid);
+			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
+			for (int sweep = 0; sweep < 5; ++sweep) {
+				kernel(&block, points, 0, count, 3600.0f);
+			}
+			if (l == 0) {
+				memcpy(reference, points, sizeof *reference * point_count);
+				memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
+			} else {
+				for (size_t i = 0; i < point_count; ++i) {
+					cr_assert(memcmp(&reference[i], &points[i], sizeof *points) == 0,
+					          "level %d differs at point %zu of %d constraints (rigid %d)", (int)levels[l], i,
+					          count, (int)rigid);
+				}
+				cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
+				          "level %d multipliers differ at %d constraints", (int)levels[l], count);
+			}
+			free_block(&block);
+			free(points);
+		}
+		free(reference);
+		free(reference_lambda);
+	}
+}
+
 /* Hinges with disjoint corners, folded at random angles, some pinned, one degenerate (its
  * wing on the hinge line): the AVX2 bend kernel gives the portable one's bits. */
 Test(simd, the_bend_kernels_agree_bit_for_bit)

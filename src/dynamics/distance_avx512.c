@@ -75,13 +75,192 @@ static inline void scatter16(plait_point *points, const uint32_t *offset, int co
 	}
 }
 
+/* Batches whose 32 points lie in runs of consecutive points (about four in five full batches
+ * of a grid cloth) move them with full-width loads and stores and a few block permutes instead
+ * of sixteen 128-bit loads and stores a side and their inserts and extracts: the kernel is
+ * bound by those shuffles (on Zen 4 a 512-bit shuffle takes two of its shuffle slots). The lanes
+ * then hold the constraints in another order (BLOCK_LANES), the same on both sides and for
+ * the rest lengths; each lane's arithmetic is unchanged, so are the bits. Three layouts, with
+ * a = the first constraint's first point, b = its second, b1 = the second constraint's first:
+ *   RUNS:  constraint k joins a + k and b + k (edges across rows, bend and shear along them);
+ *   PAIRS: constraint k joins a + 2k and a + 2k + 1 (every other edge along a row);
+ *   SHEAR: constraint 2m joins a + 2m and b1 + 2m + 1, constraint 2m + 1 joins b1 + 2m and
+ *          a + 2m + 1 (the two diagonals of a row of quads, alternating). */
+typedef enum batch_layout { LAYOUT_GATHER, LAYOUT_RUNS, LAYOUT_PAIRS, LAYOUT_SHEAR } batch_layout;
+
+/* The layout of the 16 constraints whose offset pairs start at `offset`. */
+static inline batch_layout layout_of(const uint32_t *offset)
+{
+	__m512i low = _mm512_loadu_si512(offset), high = _mm512_loadu_si512(offset + 16);
+	const __m512i half = _mm512_set1_epi32(128); /* 8 points on */
+	__m512i a = _mm512_set1_epi32((int)offset[0]);
+	/* RUNS: pairs (a + 16 k, b + 16 k). */
+	__m512i expect =
+	    _mm512_add_epi32(_mm512_mask_blend_epi32(0xAAAA, a, _mm512_set1_epi32((int)offset[1])),
+	                     _mm512_setr_epi32(0, 0, 16, 16, 32, 32, 48, 48, 64, 64, 80, 80, 96, 96, 112, 112));
+	if ((_mm512_cmpneq_epi32_mask(low, expect) |
+	     _mm512_cmpneq_epi32_mask(high, _mm512_add_epi32(expect, half))) == 0) {
+		return LAYOUT_RUNS;
+	}
+	/* PAIRS: a + 16 n for n = 0..31. */
+	expect = _mm512_add_epi32(
+	    a, _mm512_setr_epi32(0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240));
+	if ((_mm512_cmpneq_epi32_mask(low, expect) |
+	     _mm512_cmpneq_epi32_mask(high, _mm512_add_epi32(expect, _mm512_set1_epi32(256)))) == 0) {
+		return LAYOUT_PAIRS;
+	}
+	/* SHEAR: (a, b1 + 16), (b1, a + 16), then the same 32 bytes on. */
+	expect =
+	    _mm512_add_epi32(_mm512_mask_blend_epi32(0x6666, a, _mm512_set1_epi32((int)offset[2])),
+	                     _mm512_setr_epi32(0, 16, 0, 16, 32, 48, 32, 48, 64, 80, 64, 80, 96, 112, 96, 112));
+	if ((_mm512_cmpneq_epi32_mask(low, expect) |
+	     _mm512_cmpneq_epi32_mask(high, _mm512_add_epi32(expect, half))) == 0) {
+		return LAYOUT_SHEAR;
+	}
+	return LAYOUT_GATHER;
+}
+
+/* Lane 4 b + m of a batch in one of the run layouts holds its constraint 4 m + b. */
+#define BLOCK_LANES _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15)
+/* Shear batches' blocks hold constraints 4 m, 4 m + 2, 4 m + 1, 4 m + 3: lane L holds
+ * SHEAR_LANES[L], and constraint k is in lane SHEAR_SLOTS[k]. (BLOCK_LANES is its own
+ * inverse.) */
+#define SHEAR_LANES _mm512_setr_epi32(0, 4, 8, 12, 2, 6, 10, 14, 1, 5, 9, 13, 3, 7, 11, 15)
+#define SHEAR_SLOTS _mm512_setr_epi32(0, 8, 4, 12, 1, 9, 5, 13, 2, 10, 6, 14, 3, 11, 7, 15)
+
+/* The batch's 16 values of a per-constraint array from `from` (its first constraint), in the
+ * layout's lane order; a gathered batch's first `count` (the rest zero). */
+static inline __m512 load_values(const float *from, batch_layout layout, __mmask16 lanes)
+{
+	switch (layout) {
+	case LAYOUT_GATHER:
+		return _mm512_maskz_loadu_ps(lanes, from);
+	case LAYOUT_SHEAR:
+		return _mm512_permutexvar_ps(SHEAR_LANES, _mm512_loadu_ps(from));
+	default:
+		return _mm512_permutexvar_ps(BLOCK_LANES, _mm512_loadu_ps(from));
+	}
+}
+
+/* The inverse of load_values for the lanes in `update`. */
+static inline void store_values(float *to, batch_layout layout, __mmask16 update, __m512 values)
+{
+	switch (layout) {
+	case LAYOUT_GATHER:
+		_mm512_mask_storeu_ps(to, update, values);
+		break;
+	case LAYOUT_SHEAR:
+		_mm512_storeu_ps(to, _mm512_permutexvar_ps(SHEAR_SLOTS, values));
+		break;
+	default:
+		_mm512_storeu_ps(to, _mm512_permutexvar_ps(BLOCK_LANES, values));
+		break;
+	}
+}
+
+/* gather16's transposition: block b of r[m] holds the point of constraint 4 m + b. */
+static inline void transpose_blocks(const __m512 r[4], __m512 *x, __m512 *y, __m512 *z, __m512 *w)
+{
+	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]);
+	__m512 t1 = _mm512_unpacklo_ps(r[2], r[3]);
+	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]);
+	__m512 t3 = _mm512_unpackhi_ps(r[2], r[3]);
+	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/* Its inverse (a 4x4 transpose is its own). */
+static inline void untranspose_blocks(__m512 x, __m512 y, __m512 z, __m512 w, __m512 r[4])
+{
+	__m512 t0 = _mm512_unpacklo_ps(x, y);
+	__m512 t1 = _mm512_unpacklo_ps(z, w);
+	__m512 t2 = _mm512_unpackhi_ps(x, y);
+	__m512 t3 = _mm512_unpackhi_ps(z, w);
+	r[0] = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	r[1] = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	r[2] = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	r[3] = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/* Permute indices picking 128-bit blocks from two registers: block k of the result is block
+ * (q >> 1) of the first source (q even) or the second (q odd), q = the k-th argument. */
+#define BLOCKS(q0, q1, q2, q3)                                                                               \
+	_mm512_setr_epi32(BLOCK_INDEX(q0, 0), BLOCK_INDEX(q0, 1), BLOCK_INDEX(q0, 2), BLOCK_INDEX(q0, 3),        \
+	                  BLOCK_INDEX(q1, 0), BLOCK_INDEX(q1, 1), BLOCK_INDEX(q1, 2), BLOCK_INDEX(q1, 3),        \
+	                  BLOCK_INDEX(q2, 0), BLOCK_INDEX(q2, 1), BLOCK_INDEX(q2, 2), BLOCK_INDEX(q2, 3),        \
+	                  BLOCK_INDEX(q3, 0), BLOCK_INDEX(q3, 1), BLOCK_INDEX(q3, 2), BLOCK_INDEX(q3, 3))
+#define BLOCK_INDEX(q, lane) ((((q)&1) << 4) | (((q) >> 1) << 2) | (lane))
+#define FIRST(block) (2 * (block))      /* block of the first source */
+#define SECOND(block) (2 * (block) + 1) /* block of the second */
+
+/* Both sides of a batch in a run layout, block b of i[m] and j[m] holding the points of
+ * constraint 4 m + b (BLOCK_LANES once transposed; in a shear batch, 4 m + (0, 2, 1, 3)[b]:
+ * SHEAR_LANES). */
+static inline void load_blocks(plait_point *points, const uint32_t *offset, batch_layout layout, __m512 i[4],
+                               __m512 j[4])
+{
+	const float *a = point_at(points, offset[0]);
+	if (layout == LAYOUT_RUNS) {
+		const float *b = point_at(points, offset[1]);
+		for (int m = 0; m < 4; ++m) {
+			i[m] = _mm512_loadu_ps(a + 16 * m);
+			j[m] = _mm512_loadu_ps(b + 16 * m);
+		}
+	} else if (layout == LAYOUT_PAIRS) {
+		for (int m = 0; m < 4; ++m) {
+			__m512 low = _mm512_loadu_ps(a + 32 * m), high = _mm512_loadu_ps(a + 32 * m + 16);
+			i[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(2, 0, 2, 0));
+			j[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(3, 1, 3, 1));
+		}
+	} else {
+		const float *b = point_at(points, offset[2]);
+		for (int m = 0; m < 4; ++m) {
+			__m512 ra = _mm512_loadu_ps(a + 16 * m), rb = _mm512_loadu_ps(b + 16 * m);
+			/* Blocks: constraints 4 m, 4 m + 2, 4 m + 1, 4 m + 3 (SHEAR_LANES). */
+			i[m] = _mm512_shuffle_f32x4(ra, rb, _MM_SHUFFLE(2, 0, 2, 0));
+			j[m] = _mm512_shuffle_f32x4(rb, ra, _MM_SHUFFLE(3, 1, 3, 1));
+		}
+	}
+}
+
+/* The inverse of load_blocks. */
+static inline void store_blocks(plait_point *points, const uint32_t *offset, batch_layout layout,
+                                const __m512 i[4], const __m512 j[4])
+{
+	float *a = point_at(points, offset[0]);
+	if (layout == LAYOUT_RUNS) {
+		float *b = point_at(points, offset[1]);
+		for (int m = 0; m < 4; ++m) {
+			_mm512_storeu_ps(a + 16 * m, i[m]);
+			_mm512_storeu_ps(b + 16 * m, j[m]);
+		}
+	} else if (layout == LAYOUT_PAIRS) {
+		const __m512i first = BLOCKS(FIRST(0), SECOND(0), FIRST(1), SECOND(1));
+		const __m512i second = BLOCKS(FIRST(2), SECOND(2), FIRST(3), SECOND(3));
+		for (int m = 0; m < 4; ++m) {
+			_mm512_storeu_ps(a + 32 * m, _mm512_permutex2var_ps(i[m], first, j[m]));
+			_mm512_storeu_ps(a + 32 * m + 16, _mm512_permutex2var_ps(i[m], second, j[m]));
+		}
+	} else {
+		float *b = point_at(points, offset[2]);
+		const __m512i to_a = BLOCKS(FIRST(0), SECOND(2), FIRST(1), SECOND(3));
+		const __m512i to_b = BLOCKS(FIRST(2), SECOND(0), FIRST(3), SECOND(1));
+		for (int m = 0; m < 4; ++m) {
+			_mm512_storeu_ps(a + 16 * m, _mm512_permutex2var_ps(i[m], to_a, j[m]));
+			_mm512_storeu_ps(b + 16 * m, _mm512_permutex2var_ps(i[m], to_b, j[m]));
+		}
+	}
+}
+
 /* Projects constraints [c + skip, c + count), count <= 16. Lanes past count compute on copies
  * of lane 0, are masked out of the block's arrays and are not written back. The first `skip`
  * lanes (a range's tail batch, `tail`: count is 16 and they were projected by the batch before)
  * compute without effect and write their points back unchanged, which no other lane touches. */
 static inline __attribute__((always_inline)) void project16(plait_distance_block *block, plait_point *points,
                                                             int c, int count, int skip, bool tail, __m512 ih2,
-                                                            bool rigid)
+                                                            bool rigid, batch_layout layout)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
 	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
@@ -101,15 +280,22 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		offset = short_offset;
 	}
 	__m512 xi, yi, zi, wi, xj, yj, zj, wj;
-	gather16(points, offset, &xi, &yi, &zi, &wi);
-	gather16(points, offset + 1, &xj, &yj, &zj, &wj);
+	if (layout != LAYOUT_GATHER) {
+		__m512 ri[4], rj[4];
+		load_blocks(points, offset, layout, ri, rj);
+		transpose_blocks(ri, &xi, &yi, &zi, &wi);
+		transpose_blocks(rj, &xj, &yj, &zj, &wj);
+	} else {
+		gather16(points, offset, &xi, &yi, &zi, &wi);
+		gather16(points, offset + 1, &xj, &yj, &zj, &wj);
+	}
 	__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
 	__m512 length_sq =
 	    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
 	__m512 s;
 	if (rigid) {
 		/* No compliance: the rational step of distance_scalar.c, without a square root. */
-		__m512 rest = _mm512_maskz_loadu_ps(lanes, block->rest + c);
+		__m512 rest = load_values(block->rest + c, layout, lanes);
 		__m512 rest_sq = _mm512_mul_ps(rest, rest);
 		__m512 sum_sq = _mm512_max_ps(_mm512_add_ps(length_sq, rest_sq), tiny_sq);
 		__m512 w_sum = _mm512_add_ps(wi, wj);
@@ -118,22 +304,22 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		s = _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(rest_sq, length_sq), denominator));
 	} else {
 		__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), tiny);
-		__m512 C = _mm512_sub_ps(length, _mm512_maskz_loadu_ps(lanes, block->rest + c));
+		__m512 C = _mm512_sub_ps(length, load_values(block->rest + c, layout, lanes));
 		__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
 		__m512 alpha =
-		    _mm512_mask_blend_ps(stretched, _mm512_maskz_loadu_ps(lanes, block->compliance_compression + c),
-		                         _mm512_maskz_loadu_ps(lanes, block->compliance_tension + c));
+		    _mm512_mask_blend_ps(stretched, load_values(block->compliance_compression + c, layout, lanes),
+		                         load_values(block->compliance_tension + c, layout, lanes));
 		__m512 w_sum = _mm512_add_ps(wi, wj);
 		__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
 		__mmask16 active = _mm512_mask_cmp_ps_mask(moving & update, alpha, zero, _CMP_GE_OQ);
 		__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
 		__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
 		denominator = _mm512_mask_blend_ps(moving, one, denominator);
-		__m512 lambda = _mm512_maskz_loadu_ps(lanes, block->lambda + c);
+		__m512 lambda = load_values(block->lambda + c, layout, lanes);
 		s = _mm512_div_ps(_mm512_sub_ps(_mm512_sub_ps(negative_zero, C), _mm512_mul_ps(alpha_tilde, lambda)),
 		                  denominator);
 		s = _mm512_maskz_mov_ps(active, s);
-		_mm512_mask_storeu_ps(block->lambda + c, update, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
+		store_values(block->lambda + c, layout, update, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
 	}
 	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
 	/* Skipped lanes keep their loaded bits (x - 0 d would turn a -0 into +0). */
@@ -143,8 +329,35 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 	xj = _mm512_mask_add_ps(xj, update, xj, _mm512_mul_ps(sj, dx));
 	yj = _mm512_mask_add_ps(yj, update, yj, _mm512_mul_ps(sj, dy));
 	zj = _mm512_mask_add_ps(zj, update, zj, _mm512_mul_ps(sj, dz));
+	if (layout != LAYOUT_GATHER) {
+		__m512 ri[4], rj[4];
+		untranspose_blocks(xi, yi, zi, wi, ri);
+		untranspose_blocks(xj, yj, zj, wj, rj);
+		store_blocks(points, offset, layout, ri, rj);
+		return;
+	}
 	scatter16(points, offset, count, xi, yi, zi, wi);
 	scatter16(points, offset + 1, count, xj, yj, zj, wj);
+}
+
+/* A full batch, in its layout. */
+static inline __attribute__((always_inline)) void
+project_full16(plait_distance_block *block, plait_point *points, int c, __m512 ih2, bool rigid)
+{
+	switch (layout_of(block->point_offset[c])) {
+	case LAYOUT_RUNS:
+		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_RUNS);
+		break;
+	case LAYOUT_PAIRS:
+		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_PAIRS);
+		break;
+	case LAYOUT_SHEAR:
+		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_SHEAR);
+		break;
+	case LAYOUT_GATHER:
+		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_GATHER);
+		break;
+	}
 }
 
 void plait_project_distance_avx512(plait_distance_block *block, plait_point *points, int begin, int end,
@@ -158,23 +371,23 @@ void plait_project_distance_avx512(plait_distance_block *block, plait_point *poi
 	 * colour runs end in one. */
 	if (rigid) {
 		for (; c + 16 <= end; c += 16) {
-			project16(block, points, c, 16, 0, false, ih2, true);
+			project_full16(block, points, c, ih2, true);
 		}
 		if (c < end && end - begin >= 16) {
-			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, true);
+			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, true, LAYOUT_GATHER);
 			c = end;
 		}
 	} else {
 		for (; c + 16 <= end; c += 16) {
-			project16(block, points, c, 16, 0, false, ih2, false);
+			project_full16(block, points, c, ih2, false);
 		}
 		if (c < end && end - begin >= 16) {
-			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, false);
+			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, false, LAYOUT_GATHER);
 			c = end;
 		}
 	}
 	if (c < end) {
-		project16(block, points, c, end - c, 0, false, ih2, rigid);
+		project16(block, points, c, end - c, 0, false, ih2, rigid, LAYOUT_GATHER);
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them
 	 * dirty when the remainder is a tail call, and SSE instructions after that carry a false
