@@ -23,10 +23,148 @@ static inline void store_lanes(float *to, __m256i lanes, int count, __m256 value
 	}
 }
 
+/* Full batches whose 16 points lie in runs of consecutive points move them with 256-bit loads
+ * and stores (two points each) instead of 128-bit ones and their inserts and extracts, as the
+ * AVX-512 kernel does (distance_avx512.c, which describes the layouts). Here all three leave
+ * lane 4 h + m holding constraint 2 m + h (RUN_LANES); each lane's arithmetic is unchanged, so
+ * are the bits. */
+typedef enum batch_layout { LAYOUT_GATHER, LAYOUT_RUNS, LAYOUT_PAIRS, LAYOUT_SHEAR } batch_layout;
+
+static inline batch_layout layout_of(const uint32_t *offset)
+{
+	__m256i low = _mm256_loadu_si256((const __m256i *)offset);
+	__m256i high = _mm256_loadu_si256((const __m256i *)(offset + 8));
+	const __m256i half = _mm256_set1_epi32(64); /* 4 points on */
+	__m256i a = _mm256_set1_epi32((int)offset[0]);
+	/* RUNS: pairs (a + 16 k, b + 16 k). */
+	__m256i expect = _mm256_add_epi32(_mm256_blend_epi32(a, _mm256_set1_epi32((int)offset[1]), 0xAA),
+	                                  _mm256_setr_epi32(0, 0, 16, 16, 32, 32, 48, 48));
+	__m256i differ = _mm256_or_si256(_mm256_xor_si256(low, expect),
+	                                 _mm256_xor_si256(high, _mm256_add_epi32(expect, half)));
+	if (_mm256_testz_si256(differ, differ)) {
+		return LAYOUT_RUNS;
+	}
+	/* PAIRS: a + 16 n for n = 0..15. */
+	expect = _mm256_add_epi32(a, _mm256_setr_epi32(0, 16, 32, 48, 64, 80, 96, 112));
+	differ = _mm256_or_si256(_mm256_xor_si256(low, expect),
+	                         _mm256_xor_si256(high, _mm256_add_epi32(expect, _mm256_set1_epi32(128))));
+	if (_mm256_testz_si256(differ, differ)) {
+		return LAYOUT_PAIRS;
+	}
+	/* SHEAR: (a, b1 + 16), (b1, a + 16), then the same 32 bytes on. */
+	expect = _mm256_add_epi32(_mm256_blend_epi32(a, _mm256_set1_epi32((int)offset[2]), 0x66),
+	                          _mm256_setr_epi32(0, 16, 0, 16, 32, 48, 32, 48));
+	differ = _mm256_or_si256(_mm256_xor_si256(low, expect),
+	                         _mm256_xor_si256(high, _mm256_add_epi32(expect, half)));
+	if (_mm256_testz_si256(differ, differ)) {
+		return LAYOUT_SHEAR;
+	}
+	return LAYOUT_GATHER;
+}
+
+/* Lane 4 h + m holds constraint 2 m + h; constraint k is in lane RUN_SLOTS[k]. */
+#define RUN_LANES _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7)
+#define RUN_SLOTS _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7)
+
+/* A per-constraint array's 8 values from `from` in the layout's lane order. */
+static inline __m256 load_values(const float *from, batch_layout layout, __m256i lanes, int count)
+{
+	if (layout == LAYOUT_GATHER) {
+		return load_lanes(from, lanes, count);
+	}
+	return _mm256_permutevar8x32_ps(_mm256_loadu_ps(from), RUN_LANES);
+}
+
+static inline void store_values(float *to, batch_layout layout, __m256i lanes, int count, __m256 values)
+{
+	if (layout == LAYOUT_GATHER) {
+		store_lanes(to, lanes, count, values);
+	} else {
+		_mm256_storeu_ps(to, _mm256_permutevar8x32_ps(values, RUN_SLOTS));
+	}
+}
+
+/* gather8's transposition within each 128-bit half: half h of r[m] holds the point of
+ * constraint 2 m + h. */
+static inline void transpose_halves(const __m256 r[4], __m256 *x, __m256 *y, __m256 *z, __m256 *w)
+{
+	__m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpacklo_ps(r[2], r[3]);
+	__m256 t2 = _mm256_unpackhi_ps(r[0], r[1]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+	*x = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	*y = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	*z = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	*w = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+static inline void untranspose_halves(__m256 x, __m256 y, __m256 z, __m256 w, __m256 r[4])
+{
+	__m256 t0 = _mm256_unpacklo_ps(x, y), t1 = _mm256_unpacklo_ps(z, w);
+	__m256 t2 = _mm256_unpackhi_ps(x, y), t3 = _mm256_unpackhi_ps(z, w);
+	r[0] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	r[1] = _mm256_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	r[2] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	r[3] = _mm256_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/* Both sides of a batch in a run layout, half h of i[m] and j[m] holding the points of
+ * constraint 2 m + h. (_mm256_permute2f128_ps picks halves: 0 and 1 the first source's, 2 and
+ * 3 the second's, low nibble for the low half.) */
+static inline void load_halves(plait_point *points, const uint32_t *offset, batch_layout layout, __m256 i[4],
+                               __m256 j[4])
+{
+	const float *a = point_at(points, offset[0]);
+	if (layout == LAYOUT_RUNS) {
+		const float *b = point_at(points, offset[1]);
+		for (int m = 0; m < 4; ++m) {
+			i[m] = _mm256_loadu_ps(a + 8 * m);
+			j[m] = _mm256_loadu_ps(b + 8 * m);
+		}
+	} else if (layout == LAYOUT_PAIRS) {
+		for (int m = 0; m < 4; ++m) {
+			__m256 first = _mm256_loadu_ps(a + 16 * m), second = _mm256_loadu_ps(a + 16 * m + 8);
+			i[m] = _mm256_permute2f128_ps(first, second, 0x20);
+			j[m] = _mm256_permute2f128_ps(first, second, 0x31);
+		}
+	} else {
+		const float *b = point_at(points, offset[2]);
+		for (int m = 0; m < 4; ++m) {
+			__m256 ra = _mm256_loadu_ps(a + 8 * m), rb = _mm256_loadu_ps(b + 8 * m);
+			i[m] = _mm256_permute2f128_ps(ra, rb, 0x20);
+			j[m] = _mm256_permute2f128_ps(ra, rb, 0x13);
+		}
+	}
+}
+
+/* The inverse of load_halves. */
+static inline void store_halves(plait_point *points, const uint32_t *offset, batch_layout layout,
+                                const __m256 i[4], const __m256 j[4])
+{
+	float *a = (float *)point_at(points, offset[0]);
+	if (layout == LAYOUT_RUNS) {
+		float *b = (float *)point_at(points, offset[1]);
+		for (int m = 0; m < 4; ++m) {
+			_mm256_storeu_ps(a + 8 * m, i[m]);
+			_mm256_storeu_ps(b + 8 * m, j[m]);
+		}
+	} else if (layout == LAYOUT_PAIRS) {
+		for (int m = 0; m < 4; ++m) {
+			_mm256_storeu_ps(a + 16 * m, _mm256_permute2f128_ps(i[m], j[m], 0x20));
+			_mm256_storeu_ps(a + 16 * m + 8, _mm256_permute2f128_ps(i[m], j[m], 0x31));
+		}
+	} else {
+		float *b = (float *)point_at(points, offset[2]);
+		for (int m = 0; m < 4; ++m) {
+			_mm256_storeu_ps(a + 8 * m, _mm256_permute2f128_ps(i[m], j[m], 0x30));
+			_mm256_storeu_ps(b + 8 * m, _mm256_permute2f128_ps(i[m], j[m], 0x21));
+		}
+	}
+}
+
 /* Projects constraints [c, c + count), count <= 8. Lanes past count compute on copies of lane
  * 0, are masked out of the block's arrays and are not written back. */
 static inline __attribute__((always_inline)) void project8(plait_distance_block *block, plait_point *points,
-                                                           int c, int count, __m256 ih2, bool rigid)
+                                                           int c, int count, __m256 ih2, bool rigid,
+                                                           batch_layout layout)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 negative_zero = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-12f);
@@ -46,15 +184,22 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 		offset = short_offset;
 	}
 	__m256 xi, yi, zi, wi, xj, yj, zj, wj;
-	gather8_at(points, offset, 2, &xi, &yi, &zi, &wi);
-	gather8_at(points, offset + 1, 2, &xj, &yj, &zj, &wj);
+	if (layout != LAYOUT_GATHER) {
+		__m256 ri[4], rj[4];
+		load_halves(points, offset, layout, ri, rj);
+		transpose_halves(ri, &xi, &yi, &zi, &wi);
+		transpose_halves(rj, &xj, &yj, &zj, &wj);
+	} else {
+		gather8_at(points, offset, 2, &xi, &yi, &zi, &wi);
+		gather8_at(points, offset + 1, 2, &xj, &yj, &zj, &wj);
+	}
 	__m256 dx = _mm256_sub_ps(xj, xi), dy = _mm256_sub_ps(yj, yi), dz = _mm256_sub_ps(zj, zi);
 	__m256 length_sq =
 	    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
 	__m256 s;
 	if (rigid) {
 		/* No compliance: the step without a square root (distance_kernel.h). */
-		__m256 rest = load_lanes(block->rest + c, lanes, count);
+		__m256 rest = load_values(block->rest + c, layout, lanes, count);
 		__m256 rest_sq = _mm256_mul_ps(rest, rest);
 		__m256 sum_sq = _mm256_max_ps(_mm256_add_ps(length_sq, rest_sq), tiny_sq);
 		__m256 w_sum = _mm256_add_ps(wi, wj);
@@ -63,9 +208,9 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 		s = _mm256_and_ps(_mm256_div_ps(_mm256_sub_ps(rest_sq, length_sq), denominator), moving);
 	} else {
 		__m256 length = _mm256_max_ps(_mm256_sqrt_ps(length_sq), tiny);
-		__m256 C = _mm256_sub_ps(length, load_lanes(block->rest + c, lanes, count));
-		__m256 alpha = _mm256_blendv_ps(load_lanes(block->compliance_compression + c, lanes, count),
-		                                load_lanes(block->compliance_tension + c, lanes, count),
+		__m256 C = _mm256_sub_ps(length, load_values(block->rest + c, layout, lanes, count));
+		__m256 alpha = _mm256_blendv_ps(load_values(block->compliance_compression + c, layout, lanes, count),
+		                                load_values(block->compliance_tension + c, layout, lanes, count),
 		                                _mm256_cmp_ps(C, zero, _CMP_GT_OQ));
 		__m256 w_sum = _mm256_add_ps(wi, wj);
 		__m256 moving = _mm256_cmp_ps(w_sum, zero, _CMP_GT_OQ);
@@ -73,11 +218,12 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 		__m256 alpha_tilde = _mm256_mul_ps(_mm256_max_ps(alpha, zero), ih2);
 		__m256 denominator = _mm256_mul_ps(_mm256_add_ps(w_sum, alpha_tilde), length);
 		denominator = _mm256_blendv_ps(one, denominator, moving);
-		__m256 lambda = load_lanes(block->lambda + c, lanes, count);
+		__m256 lambda = load_values(block->lambda + c, layout, lanes, count);
 		s = _mm256_div_ps(_mm256_sub_ps(_mm256_sub_ps(negative_zero, C), _mm256_mul_ps(alpha_tilde, lambda)),
 		                  denominator);
 		s = _mm256_and_ps(s, active);
-		store_lanes(block->lambda + c, lanes, count, _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
+		store_values(block->lambda + c, layout, lanes, count,
+		             _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
 	}
 	__m256 si = _mm256_mul_ps(wi, s), sj = _mm256_mul_ps(wj, s);
 	xi = _mm256_sub_ps(xi, _mm256_mul_ps(si, dx));
@@ -86,7 +232,12 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 	xj = _mm256_add_ps(xj, _mm256_mul_ps(sj, dx));
 	yj = _mm256_add_ps(yj, _mm256_mul_ps(sj, dy));
 	zj = _mm256_add_ps(zj, _mm256_mul_ps(sj, dz));
-	if (count == 8) {
+	if (layout != LAYOUT_GATHER) {
+		__m256 ri[4], rj[4];
+		untranspose_halves(xi, yi, zi, wi, ri);
+		untranspose_halves(xj, yj, zj, wj, rj);
+		store_halves(points, offset, layout, ri, rj);
+	} else if (count == 8) {
 		scatter8_at(points, offset, 2, xi, yi, zi, wi);
 		scatter8_at(points, offset + 1, 2, xj, yj, zj, wj);
 	} else {
@@ -100,6 +251,26 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 	}
 }
 
+/* A full batch, in its layout. */
+static inline __attribute__((always_inline)) void
+project_full8(plait_distance_block *block, plait_point *points, int c, __m256 ih2, bool rigid)
+{
+	switch (layout_of(block->point_offset[c])) {
+	case LAYOUT_RUNS:
+		project8(block, points, c, 8, ih2, rigid, LAYOUT_RUNS);
+		break;
+	case LAYOUT_PAIRS:
+		project8(block, points, c, 8, ih2, rigid, LAYOUT_PAIRS);
+		break;
+	case LAYOUT_SHEAR:
+		project8(block, points, c, 8, ih2, rigid, LAYOUT_SHEAR);
+		break;
+	case LAYOUT_GATHER:
+		project8(block, points, c, 8, ih2, rigid, LAYOUT_GATHER);
+		break;
+	}
+}
+
 void plait_project_distance_avx2(plait_distance_block *block, plait_point *points, int begin, int end,
                                  float inverse_h_squared)
 {
@@ -107,17 +278,17 @@ void plait_project_distance_avx2(plait_distance_block *block, plait_point *point
 	int c = begin;
 	if (block->compliant_count == 0) {
 		for (; c + 8 <= end; c += 8) {
-			project8(block, points, c, 8, ih2, true);
+			project_full8(block, points, c, ih2, true);
 		}
 		if (c < end) {
-			project8(block, points, c, end - c, ih2, true);
+			project8(block, points, c, end - c, ih2, true, LAYOUT_GATHER);
 		}
 	} else {
 		for (; c + 8 <= end; c += 8) {
-			project8(block, points, c, 8, ih2, false);
+			project_full8(block, points, c, ih2, false);
 		}
 		if (c < end) {
-			project8(block, points, c, end - c, ih2, false);
+			project8(block, points, c, end - c, ih2, false, LAYOUT_GATHER);
 		}
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them
