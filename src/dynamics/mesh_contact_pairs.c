@@ -432,14 +432,6 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 	/* The gather passes over the rest pairs (never listed) before any distance. */
 	uint32_t skip = cull ? pass->rest_slots : 0u;
 	const element_shape *shape[2] = {&pass->mc->shapes[a], &pass->mc->shapes[b]};
-	vec3 x[2][3] = {{{0}}};
-	if (cull) {
-		const plait_particles *p = &pass->sim->particles;
-		for (int k = 0; k < 3; ++k) {
-			x[0][k] = p->point[ea->v[k]].x;
-			x[1][k] = p->point[eb->v[k]].x;
-		}
-	}
 	float gap = pass->list_distance;
 	/* Pairs the self-collision flag leaves to the failsafe are culled within its reach. */
 	bool face_pushes = !self || self_pushes(ma, PAIR_VERTEX_FACE);
@@ -466,12 +458,26 @@ static void walk_element_pair(pair_pass *pass, int a, int b, const plait_materia
 			int kept = bits3(own_vertices[collider]) + bits3(own_edges[collider]);
 			pass->features_kept += kept;
 			pass->features_left_out += all - kept;
+			/* No corner or edge of the collider's triangle is left, and this element's own
+			 * vertices meet collider faces in contact.c: nothing to list (a third of the cloth
+			 * and collider element pairs in hang-self --stiff). */
+			if (kept == 0) {
+				return;
+			}
 		}
 	}
 	/* Elements whose boxes lie apart by more than every gap below (gather_triangle_pair). */
 	if (cull && boxes_apart(shape[0]->lower, shape[0]->upper, shape[1]->lower, shape[1]->upper,
 	                        plait_maxf(gap, edge_gap))) {
 		return;
+	}
+	vec3 x[2][3] = {{{0}}};
+	if (cull) {
+		const plait_particles *p = &pass->sim->particles;
+		for (int k = 0; k < 3; ++k) {
+			x[0][k] = p->point[ea->v[k]].x;
+			x[1][k] = p->point[eb->v[k]].x;
+		}
 	}
 	int v[4];
 	for (int turn = 0; turn < 2; ++turn) {
