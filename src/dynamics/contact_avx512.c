@@ -28,12 +28,8 @@ int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_b
 		if (((flags[0] | flags[1]) & (0x0101010101010101ull * PLAIT_PARTICLE_COLLIDE)) == 0) {
 			continue;
 		}
-		int index[16];
-		for (int m = 0; m < 16; ++m) {
-			index[m] = i + m;
-		}
 		__m512 bx, by, bz, w, ax, ay, az;
-		gather16(p->point, index, &bx, &by, &bz, &w);
+		load_points16(p->point, i, &bx, &by, &bz, &w);
 		load_vec3x16(p->x_prev + i, &ax, &ay, &az);
 		/* path_may_reach, as contact_avx2.c. */
 		__mmask16 in_box = (__mmask16)(_mm512_cmp_ps_mask(_mm512_max_ps(ax, bx), lx, _CMP_GE_OQ) &

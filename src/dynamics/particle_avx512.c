@@ -30,12 +30,8 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	const uint64_t on_plane_bits = 0x0101010101010101ull * PLAIT_PARTICLE_ON_PLANE;
 	int i = begin;
 	for (; i + 16 <= end; i += 16) {
-		int index[16];
-		for (int m = 0; m < 16; ++m) {
-			index[m] = i + m;
-		}
 		__m512 x, y, z, w;
-		gather16(p->point, index, &x, &y, &z, &w);
+		load_points16(p->point, i, &x, &y, &z, &w);
 		__mmask16 pinned = _mm512_cmp_ps_mask(w, zero, _CMP_EQ_OQ);
 		uint64_t flags[2];
 		memcpy(flags, p->flags + i, sizeof flags);
@@ -122,7 +118,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 			y = _mm512_load_ps(ly);
 			z = _mm512_load_ps(lz);
 		}
-		scatter16(p->point, index, 16, x, y, z, w);
+		store_points16(p->point, i, x, y, z, w);
 	}
 	for (; i < end; ++i) {
 		if (ending) {
