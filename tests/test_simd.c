@@ -118,63 +118,100 @@ Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 }
 
 /* Batches laid out as a grid cloth's colour runs often are, which the vector kernels move with
- * full-width loads and stores (distance_avx512.c): each 16 constraints a region of 64 points of
- * its own, taking in turn: two runs of consecutive points (k: a + k, b + k), neighbours in one
- * run (a + 2k, a + 2k + 1), the two diagonals of a row of quads (2m: a + 2m, b + 2m + 1;
- * 2m + 1: b + 2m, a + 2m + 1), a shuffled batch, and two runs but for one lane. The count
+ * full-width loads and stores (distance_avx512.c): each 16 constraints a region of points of its
+ * own, starting anywhere (not on a 64-byte line), taking in turn the three layouts, each with its
+ * second run below its first or above it, a shuffled batch, and each layout but for one lane (its
+ * first or second point moved to a free point of the region):
+ *   runs: constraint k joins a + k and b + k;
+ *   neighbours: a + 2k and a + 2k + 1;
+ *   diagonals: 2m joins a + 2m and b + 2m + 1, 2m + 1 joins b + 2m and a + 2m + 1.
+ * One constraint of each batch has coincident ends and another both ends pinned. The count
  * leaves a tail batch and a remainder. */
-enum { LAYOUT_KINDS = 5, REGION_POINTS = 64 };
+enum { LAYOUT_KINDS = 10, REGION_POINTS = 70 };
+
+static void layout_pair(int kind, int k, int base, int *i, int *j)
+{
+	int m = k / 2;
+	bool low_second = kind % 2 == 1; /* the second run below the first */
+	int a = low_second ? base + 34 : base, b = low_second ? base : base + 34;
+	switch (kind) {
+	case 0:
+	case 1:
+	case 6: /* runs; 6: lane 15's second point moved */
+		*i = a + k;
+		*j = kind == 6 && k == 15 ? base + 66 : b + k;
+		break;
+	case 2:
+	case 3:
+	case 7: /* neighbours; 7: lane 7's second point moved */
+		*i = base + 2 * k;
+		*j = kind == 7 && k == 7 ? base + 66 : base + 2 * k + 1;
+		break;
+	case 4:
+	case 5:
+	case 8: /* diagonals; 8: lane 10's first point moved */
+		*i = k % 2 == 0 ? a + 2 * m : b + 2 * m;
+		*j = k % 2 == 0 ? b + 2 * m + 1 : a + 2 * m + 1;
+		if (kind == 8 && k == 10) {
+			*i = base + 67;
+		}
+		break;
+	default: /* shuffled: constraint k joins points 2k and 2k + 1 of a permutation */
+		*i = base + (int)((7u * (uint32_t)(2 * k) + 3u) % 32u);
+		*j = base + (int)((7u * (uint32_t)(2 * k + 1) + 3u) % 32u);
+		break;
+	}
+}
+
+/* FILLERS constraints first, in points of their own after the regions: the kernels run over
+ * them and then over the batches, which so start off a multiple of 16 in the block, as a colour
+ * run's do. */
+enum { FILLERS = 5 };
+
+static int layout_point_count(int count)
+{
+	return REGION_POINTS * ((count - FILLERS + 15) / 16) + 2 * FILLERS;
+}
 
 static void make_layout_block(plait_distance_block *block, plait_point *points, int count, uint32_t seed,
                               bool rigid)
 {
 	make_block(block, points, count, seed, rigid);
 	uint32_t state = seed ^ 0x9e3779b9u;
+	int point_count = layout_point_count(count);
+	for (int i = 0; i < point_count; ++i) {
+		points[i].x =
+		    (plait_vec3){random_unit(&state), random_unit(&state) - 0.5f, 2.0f * random_unit(&state)};
+		points[i].w = next_random(&state) % 8 == 0 ? 0.0f : 0.5f + random_unit(&state);
+	}
 	for (int c = 0; c < count; ++c) {
-		int batch = c / 16, k = c % 16, m = k / 2, base = REGION_POINTS * batch;
-		int i = 0, j = 0;
-		switch (batch % LAYOUT_KINDS) {
-		case 0: /* two runs */
-			i = base + k;
-			j = base + 32 + k;
-			break;
-		case 1: /* neighbours */
-			i = base + 2 * k;
-			j = base + 2 * k + 1;
-			break;
-		case 2: /* diagonals */
-			i = k % 2 == 0 ? base + 2 * m : base + 32 + 2 * m;
-			j = k % 2 == 0 ? base + 32 + 2 * m + 1 : base + 2 * m + 1;
-			break;
-		case 3: /* shuffled: constraint k joins points 2k and 2k + 1 of a permutation */
-			i = base + (int)((7u * (uint32_t)(2 * k) + 3u) % 32u);
-			j = base + (int)((7u * (uint32_t)(2 * k + 1) + 3u) % 32u);
-			break;
-		default: /* two runs but the last lane */
-			i = base + (k == 15 ? 20 : k);
-			j = base + 32 + k;
-			break;
+		int i, j;
+		if (c < FILLERS) {
+			i = point_count - 2 * FILLERS + 2 * c + 1;
+			j = point_count - 2 * FILLERS + 2 * c;
+		} else {
+			int batch = (c - FILLERS) / 16, k = (c - FILLERS) % 16;
+			layout_pair(batch % LAYOUT_KINDS, k, REGION_POINTS * batch + batch % 3, &i, &j);
+			if (k == 3) {
+				points[j].x = points[i].x; /* coincident ends */
+			} else if (k == 12) {
+				points[i].w = points[j].w = 0.0f; /* both ends pinned */
+			}
 		}
 		block->pair[c][0] = i;
 		block->pair[c][1] = j;
 		block->point_offset[c][0] = plait_point_offset(i);
 		block->point_offset[c][1] = plait_point_offset(j);
 	}
-	int point_count = REGION_POINTS * ((count + 15) / 16);
-	for (int i = 0; i < point_count; ++i) {
-		points[i].x =
-		    (plait_vec3){random_unit(&state), random_unit(&state) - 0.5f, 2.0f * random_unit(&state)};
-		points[i].w = next_random(&state) % 8 == 0 ? 0.0f : 0.5f + random_unit(&state);
-	}
 }
 
 Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
 {
-	int counts[] = {16 * LAYOUT_KINDS, 16 * 3 * LAYOUT_KINDS + 7};
+	int counts[] = {FILLERS + 16 * LAYOUT_KINDS, FILLERS + 16 * 2 * LAYOUT_KINDS + 7};
 	for (size_t n = 0; n < 2 * sizeof counts / sizeof counts[0]; ++n) {
 		int count = counts[n / 2];
 		bool rigid = n % 2 == 1;
-		size_t point_count = (size_t)(REGION_POINTS * ((count + 15) / 16));
+		size_t point_count = (size_t)layout_point_count(count);
 		size_t bytes = (sizeof(plait_point) * point_count + 63) / 64 * 64;
 		plait_point *reference = malloc(bytes);
 		float *reference_lambda = malloc(sizeof(float) * (size_t)count);
@@ -190,7 +227,8 @@ Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
 			cr_assert_eq(block.compliant_count == 0, rigid);
 			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
 			for (int sweep = 0; sweep < 5; ++sweep) {
-				kernel(&block, points, 0, count, 3600.0f);
+				kernel(&block, points, 0, FILLERS, 3600.0f);
+				kernel(&block, points, FILLERS, count, 3600.0f);
 			}
 			if (l == 0) {
 				memcpy(reference, points, sizeof *reference * point_count);

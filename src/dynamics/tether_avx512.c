@@ -67,44 +67,13 @@ static inline __mmask16 within_reach16(lanes3 q, lanes3 anchor, __m512 length, _
 }
 
 /* Rows whose sixteen particles are consecutive (a cloth's rows mostly are: tether.c sorts them
- * by particle) load and store their points whole, four 512-bit moves each way instead of
- * sixteen 128-bit ones with their inserts and extracts. The transposition then leaves lane
- * 4 b + m holding row 4 m + b (and row k in lane RUN_LANE(k), the same permutation); each
- * lane's arithmetic is unchanged, so are the bits. */
-#define RUN_LANES _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15)
-#define RUN_LANE(k) (4 * ((k) % 4) + (k) / 4)
-
+ * by particle) load and store their points whole (load_points16), not by a gather. */
 static inline bool consecutive16(const int *particle)
 {
 	__m512i expect =
 	    _mm512_add_epi32(_mm512_set1_epi32(particle[0]),
 	                     _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
 	return _mm512_cmpneq_epi32_mask(_mm512_loadu_si512(particle), expect) == 0;
-}
-
-static inline void load_run16(const plait_point *points, int first, __m512 *x, __m512 *y, __m512 *z,
-                              __m512 *w)
-{
-	const float *p = &points[first].x.x;
-	__m512 r0 = _mm512_loadu_ps(p), r1 = _mm512_loadu_ps(p + 16);
-	__m512 r2 = _mm512_loadu_ps(p + 32), r3 = _mm512_loadu_ps(p + 48);
-	__m512 t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpacklo_ps(r2, r3);
-	__m512 t2 = _mm512_unpackhi_ps(r0, r1), t3 = _mm512_unpackhi_ps(r2, r3);
-	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
-}
-
-static inline void store_run16(plait_point *points, int first, __m512 x, __m512 y, __m512 z, __m512 w)
-{
-	float *p = &points[first].x.x;
-	__m512 t0 = _mm512_unpacklo_ps(x, y), t1 = _mm512_unpacklo_ps(z, w);
-	__m512 t2 = _mm512_unpackhi_ps(x, y), t3 = _mm512_unpackhi_ps(z, w);
-	_mm512_storeu_ps(p, _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)));
-	_mm512_storeu_ps(p + 16, _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)));
-	_mm512_storeu_ps(p + 32, _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)));
-	_mm512_storeu_ps(p + 48, _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2)));
 }
 
 int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
@@ -129,17 +98,15 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		lanes3 p;
 		__m512 w, l0, l1;
 		if (run) {
-			load_run16(points, particle[b], &p.x, &p.y, &p.z, &w);
-			l0 = _mm512_permutexvar_ps(RUN_LANES, _mm512_loadu_ps(length0 + b));
-			l1 = _mm512_permutexvar_ps(RUN_LANES, _mm512_loadu_ps(length1 + b));
+			load_points16(points, particle[b], &p.x, &p.y, &p.z, &w);
 		} else {
 			for (int k = 0; k < 16; ++k) {
 				index[k] = particle[b + (k < n ? k : 0)];
 			}
 			gather16(points, index, &p.x, &p.y, &p.z, &w);
-			l0 = _mm512_maskz_loadu_ps(lanes, length0 + b);
-			l1 = _mm512_maskz_loadu_ps(lanes, length1 + b);
 		}
+		l0 = _mm512_maskz_loadu_ps(lanes, length0 + b);
+		l1 = _mm512_maskz_loadu_ps(lanes, length1 + b);
 		lanes3 d0 = sub3(p, a0), d1 = sub3(p, a1);
 		__m512 d0_sq = dot3(d0, d0), d1_sq = dot3(d1, d1);
 		/* find_taut: either tether longer than its length, and the particle free. */
@@ -166,7 +133,7 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 			lanes3 q = select3(none, p, mul_add3(p, t, sub3(projected, p)));
 			q = select3(taut, q, p);
 			if (run) {
-				store_run16(points, particle[b], q.x, q.y, q.z, w);
+				store_points16(points, particle[b], q.x, q.y, q.z, w);
 			} else {
 				scatter16(points, index, n, q.x, q.y, q.z, w);
 			}
@@ -206,17 +173,10 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		q = select3((__mmask16)(taut & found), q, p);
 		unsigned missing = (unsigned)(taut & (__mmask16)~found);
 		if (run) {
-			store_run16(points, particle[b], q.x, q.y, q.z, w);
-			/* In row order, as the lanes of a gathered batch give them. */
-			for (int k = 0; missing != 0 && k < 16; ++k) {
-				if (missing & (1u << RUN_LANE(k))) {
-					missing &= ~(1u << RUN_LANE(k));
-					unfound[unfound_count++] = b + k;
-				}
-			}
-			continue;
+			store_points16(points, particle[b], q.x, q.y, q.z, w);
+		} else {
+			scatter16(points, index, n, q.x, q.y, q.z, w);
 		}
-		scatter16(points, index, n, q.x, q.y, q.z, w);
 		while (missing != 0) {
 			int lane = __builtin_ctz(missing);
 			missing &= missing - 1;
