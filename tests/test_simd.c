@@ -72,48 +72,62 @@ static void free_block(plait_distance_block *block)
 	free(block->lambda);
 }
 
+typedef void block_maker(plait_distance_block *block, plait_point *points, int count, uint32_t seed,
+                         bool rigid);
+
+/* A block of count constraints over point_count points from `make`, swept five times by every
+ * kernel the processor runs (over [0, split) and then [split, count)): each must leave the
+ * portable kernel's positions and multipliers, bit for bit. */
+static void check_kernels(block_maker *make, int count, int point_count, int split, uint32_t seed, bool rigid)
+{
+	plait_point *reference = malloc(sizeof *reference * (size_t)point_count);
+	float *reference_lambda = malloc(sizeof(float) * (size_t)count);
+	for (int l = 0; l < 3; ++l) {
+		if (!plait_simd_supported(levels[l])) {
+			cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
+			continue;
+		}
+		plait_distance_block block;
+		memset(&block, 0, sizeof block);
+		// aligned_alloc wants a size that is a multiple of the alignment (ASan enforces it).
+		size_t bytes = (sizeof(plait_point) * (size_t)point_count + 63) / 64 * 64;
+		plait_point *points = aligned_alloc(64, bytes);
+		make(&block, points, count, seed, rigid);
+		cr_assert_eq(block.compliant_count == 0, rigid);
+		plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
+		for (int sweep = 0; sweep < 5; ++sweep) {
+			kernel(&block, points, 0, split, 3600.0f);
+			kernel(&block, points, split, count, 3600.0f);
+		}
+		for (int i = 0; i < point_count; ++i) {
+			cr_assert(isfinite(points[i].x.x) && isfinite(points[i].x.y) && isfinite(points[i].x.z));
+		}
+		if (l == 0) {
+			memcpy(reference, points, sizeof *reference * (size_t)point_count);
+			memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
+		} else {
+			for (int i = 0; i < point_count; ++i) {
+				cr_assert(
+				    memcmp(&reference[i], &points[i], sizeof *points) == 0,
+				    "level %d differs from the portable kernel at point %d of %d constraints (rigid %d)",
+				    (int)levels[l], i, count, (int)rigid);
+			}
+			cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
+			          "level %d multipliers differ at %d constraints", (int)levels[l], count);
+		}
+		free_block(&block);
+		free(points);
+	}
+	free(reference);
+	free(reference_lambda);
+}
+
 Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 {
 	int counts[] = {1, 7, 8, 15, 16, 17, 33, 1000};
 	for (size_t n = 0; n < 2 * sizeof counts / sizeof counts[0]; ++n) {
 		int count = counts[n / 2];
-		bool rigid = n % 2 == 1;
-		plait_point *reference = malloc(sizeof *reference * (size_t)(2 * count));
-		float *reference_lambda = malloc(sizeof(float) * (size_t)count);
-		for (int l = 0; l < 3; ++l) {
-			if (!plait_simd_supported(levels[l])) {
-				cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
-				continue;
-			}
-			plait_distance_block block;
-			memset(&block, 0, sizeof block);
-			// aligned_alloc wants a size that is a multiple of the alignment (ASan enforces it).
-			size_t bytes = (sizeof(plait_point) * (size_t)(2 * count + 16) + 63) / 64 * 64;
-			plait_point *points = aligned_alloc(64, bytes);
-			make_block(&block, points, count, 12345u + (uint32_t)count, rigid);
-			cr_assert_eq(block.compliant_count == 0, rigid);
-			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
-			for (int sweep = 0; sweep < 5; ++sweep) {
-				kernel(&block, points, 0, count, 3600.0f);
-			}
-			for (int i = 0; i < 2 * count; ++i) {
-				cr_assert(isfinite(points[i].x.x) && isfinite(points[i].x.y) && isfinite(points[i].x.z));
-			}
-			if (l == 0) {
-				memcpy(reference, points, sizeof *reference * (size_t)(2 * count));
-				memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
-			} else {
-				cr_assert(memcmp(reference, points, sizeof *reference * (size_t)(2 * count)) == 0,
-				          "level %d differs from the portable kernel at %d constraints (rigid %d)",
-				          (int)levels[l], count, (int)rigid);
-				cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
-				          "level %d multipliers differ at %d constraints", (int)levels[l], count);
-			}
-			free_block(&block);
-			free(points);
-		}
-		free(reference);
-		free(reference_lambda);
+		check_kernels(make_block, count, 2 * count, 0, 12345u + (uint32_t)count, n % 2 == 1);
 	}
 }
 
@@ -210,43 +224,8 @@ Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
 	int counts[] = {FILLERS + 16 * LAYOUT_KINDS, FILLERS + 16 * 2 * LAYOUT_KINDS + 7};
 	for (size_t n = 0; n < 2 * sizeof counts / sizeof counts[0]; ++n) {
 		int count = counts[n / 2];
-		bool rigid = n % 2 == 1;
-		size_t point_count = (size_t)layout_point_count(count);
-		size_t bytes = (sizeof(plait_point) * point_count + 63) / 64 * 64;
-		plait_point *reference = malloc(bytes);
-		float *reference_lambda = malloc(sizeof(float) * (size_t)count);
-		for (int l = 0; l < 3; ++l) {
-			if (!plait_simd_supported(levels[l])) {
-				cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
-				continue;
-			}
-			plait_distance_block block;
-			memset(&block, 0, sizeof block);
-			plait_point *points = aligned_alloc(64, bytes);
-			make_layout_block(&block, points, count, 777u + (uint32_t)count, rigid);
-			cr_assert_eq(block.compliant_count == 0, rigid);
-			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
-			for (int sweep = 0; sweep < 5; ++sweep) {
-				kernel(&block, points, 0, FILLERS, 3600.0f);
-				kernel(&block, points, FILLERS, count, 3600.0f);
-			}
-			if (l == 0) {
-				memcpy(reference, points, sizeof *reference * point_count);
-				memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
-			} else {
-				for (size_t i = 0; i < point_count; ++i) {
-					cr_assert(memcmp(&reference[i], &points[i], sizeof *points) == 0,
-					          "level %d differs at point %zu of %d constraints (rigid %d)", (int)levels[l], i,
-					          count, (int)rigid);
-				}
-				cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
-				          "level %d multipliers differ at %d constraints", (int)levels[l], count);
-			}
-			free_block(&block);
-			free(points);
-		}
-		free(reference);
-		free(reference_lambda);
+		check_kernels(make_layout_block, count, layout_point_count(count), FILLERS, 777u + (uint32_t)count,
+		              n % 2 == 1);
 	}
 }
 
