@@ -251,7 +251,8 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 	}
 }
 
-/* A full batch, in its layout. */
+/* A full batch, in its layout: a case for each, so that each gets its own copy of project8 with
+ * the layout a constant. */
 static inline __attribute__((always_inline)) void
 project_full8(plait_distance_block *block, plait_point *points, int c, __m256 ih2, bool rigid)
 {

@@ -6,6 +6,8 @@
 #if PLAIT_X86_KERNELS
 #include <immintrin.h>
 
+#include "dynamics/points_avx512.h"
+
 /* Points by byte offset (plait_point_offset). */
 static inline float *point_at(plait_point *points, uint32_t offset)
 {
@@ -20,8 +22,8 @@ static inline __m128 load_point(plait_point *points, uint32_t offset)
 /* Loads the points of one side of 16 constraints and transposes them into a register per
  * coordinate, lane k holding constraint k: register r_m gets points m, m + 4, m + 8 and m + 12
  * in its four 128-bit blocks, and a 4x4 transpose inside each block finishes the job. */
-static inline void gather16(plait_point *points, const uint32_t *offset, __m512 *x, __m512 *y, __m512 *z,
-                            __m512 *w)
+static inline void gather16_at(plait_point *points, const uint32_t *offset, __m512 *x, __m512 *y, __m512 *z,
+                               __m512 *w)
 {
 	__m512 r[4];
 	for (int m = 0; m < 4; ++m) {
@@ -30,30 +32,17 @@ static inline void gather16(plait_point *points, const uint32_t *offset, __m512 
 		v = _mm512_insertf32x4(v, load_point(points, offset[2 * (m + 8)]), 2);
 		r[m] = _mm512_insertf32x4(v, load_point(points, offset[2 * (m + 12)]), 3);
 	}
-	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]);
-	__m512 t1 = _mm512_unpacklo_ps(r[2], r[3]);
-	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]);
-	__m512 t3 = _mm512_unpackhi_ps(r[2], r[3]);
-	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+	transpose_points16(r, x, y, z, w);
 }
 
-/* The inverse of gather16, storing the first `count` lanes only (lanes past a range's end
+/* The inverse of gather16_at, storing the first `count` lanes only (lanes past a range's end
  * repeat lane 0's points, which must not be written back over it). Lane k's offset is
  * offset[2 k]: one side of a block's point_offset pairs. */
-static inline void scatter16(plait_point *points, const uint32_t *offset, int count, __m512 x, __m512 y,
-                             __m512 z, __m512 w)
+static inline void scatter16_at(plait_point *points, const uint32_t *offset, int count, __m512 x, __m512 y,
+                                __m512 z, __m512 w)
 {
-	__m512 t0 = _mm512_unpacklo_ps(x, y);
-	__m512 t1 = _mm512_unpacklo_ps(z, w);
-	__m512 t2 = _mm512_unpackhi_ps(x, y);
-	__m512 t3 = _mm512_unpackhi_ps(z, w);
-	__m512 r[4] = {_mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
+	__m512 r[4];
+	untranspose_points16(x, y, z, w, r);
 	if (count == 16) {
 		for (int m = 0; m < 4; ++m) {
 			_mm_store_ps(point_at(points, offset[2 * m]), _mm512_castps512_ps128(r[m]));
@@ -121,7 +110,7 @@ static inline batch_layout layout_of(const uint32_t *offset)
 }
 
 /* Lane 4 b + m of a batch in one of the run layouts holds its constraint 4 m + b. */
-#define BLOCK_LANES _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15)
+#define BLOCK_LANES POINT_LANES
 /* Shear batches' blocks hold constraints 4 m, 4 m + 2, 4 m + 1, 4 m + 3: lane L holds
  * SHEAR_LANES[L], and constraint k is in lane SHEAR_SLOTS[k]. (BLOCK_LANES is its own
  * inverse.) */
@@ -156,32 +145,6 @@ static inline void store_values(float *to, batch_layout layout, __mmask16 update
 		_mm512_storeu_ps(to, _mm512_permutexvar_ps(BLOCK_LANES, values));
 		break;
 	}
-}
-
-/* gather16's transposition: block b of r[m] holds the point of constraint 4 m + b. */
-static inline void transpose_blocks(const __m512 r[4], __m512 *x, __m512 *y, __m512 *z, __m512 *w)
-{
-	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]);
-	__m512 t1 = _mm512_unpacklo_ps(r[2], r[3]);
-	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]);
-	__m512 t3 = _mm512_unpackhi_ps(r[2], r[3]);
-	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
-}
-
-/* Its inverse (a 4x4 transpose is its own). */
-static inline void untranspose_blocks(__m512 x, __m512 y, __m512 z, __m512 w, __m512 r[4])
-{
-	__m512 t0 = _mm512_unpacklo_ps(x, y);
-	__m512 t1 = _mm512_unpacklo_ps(z, w);
-	__m512 t2 = _mm512_unpackhi_ps(x, y);
-	__m512 t3 = _mm512_unpackhi_ps(z, w);
-	r[0] = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	r[1] = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	r[2] = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	r[3] = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 
 /* Permute indices picking 128-bit blocks from two registers: block k of the result is block
@@ -283,11 +246,11 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 	if (layout != LAYOUT_GATHER) {
 		__m512 ri[4], rj[4];
 		load_blocks(points, offset, layout, ri, rj);
-		transpose_blocks(ri, &xi, &yi, &zi, &wi);
-		transpose_blocks(rj, &xj, &yj, &zj, &wj);
+		transpose_points16(ri, &xi, &yi, &zi, &wi);
+		transpose_points16(rj, &xj, &yj, &zj, &wj);
 	} else {
-		gather16(points, offset, &xi, &yi, &zi, &wi);
-		gather16(points, offset + 1, &xj, &yj, &zj, &wj);
+		gather16_at(points, offset, &xi, &yi, &zi, &wi);
+		gather16_at(points, offset + 1, &xj, &yj, &zj, &wj);
 	}
 	__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
 	__m512 length_sq =
@@ -331,16 +294,17 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 	zj = _mm512_mask_add_ps(zj, update, zj, _mm512_mul_ps(sj, dz));
 	if (layout != LAYOUT_GATHER) {
 		__m512 ri[4], rj[4];
-		untranspose_blocks(xi, yi, zi, wi, ri);
-		untranspose_blocks(xj, yj, zj, wj, rj);
+		untranspose_points16(xi, yi, zi, wi, ri);
+		untranspose_points16(xj, yj, zj, wj, rj);
 		store_blocks(points, offset, layout, ri, rj);
 		return;
 	}
-	scatter16(points, offset, count, xi, yi, zi, wi);
-	scatter16(points, offset + 1, count, xj, yj, zj, wj);
+	scatter16_at(points, offset, count, xi, yi, zi, wi);
+	scatter16_at(points, offset + 1, count, xj, yj, zj, wj);
 }
 
-/* A full batch, in its layout. */
+/* A full batch, in its layout: a case for each, so that each gets its own copy of project16 with
+ * the layout a constant. */
 static inline __attribute__((always_inline)) void
 project_full16(plait_distance_block *block, plait_point *points, int c, __m512 ih2, bool rigid)
 {

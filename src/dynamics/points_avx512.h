@@ -1,13 +1,36 @@
 /* Moving points and vectors between memory and AVX-512 registers, sixteen at a time: points
  * (16 bytes each: x, y, z, w) with a 4x4 transpose in each 128-bit block, vec3 arrays by
- * two-source permutes. Shared by the AVX-512 kernels but the distance kernel (which addresses
- * points by byte offset); include only from files compiled with -mavx512f. */
+ * two-source permutes. Shared by the AVX-512 kernels (the distance kernel addresses its points
+ * by byte offset and gathers them itself); include only from files compiled with -mavx512f. */
 #ifndef PLAIT_DYNAMICS_POINTS_AVX512_H
 #define PLAIT_DYNAMICS_POINTS_AVX512_H
 
 #include <immintrin.h>
 
 #include "dynamics/sim.h"
+
+/* Four registers of four points each (block b of r[m]: a point's x, y, z, w) into a register
+ * per coordinate, lane 4 b + m holding block b of r[m]: a 4x4 transpose in each 128-bit block. */
+static inline void transpose_points16(const __m512 r[4], __m512 *x, __m512 *y, __m512 *z, __m512 *w)
+{
+	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]), t1 = _mm512_unpacklo_ps(r[2], r[3]);
+	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]), t3 = _mm512_unpackhi_ps(r[2], r[3]);
+	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/* Its inverse (a 4x4 transpose is its own). */
+static inline void untranspose_points16(__m512 x, __m512 y, __m512 z, __m512 w, __m512 r[4])
+{
+	__m512 t0 = _mm512_unpacklo_ps(x, y), t1 = _mm512_unpacklo_ps(z, w);
+	__m512 t2 = _mm512_unpackhi_ps(x, y), t3 = _mm512_unpackhi_ps(z, w);
+	r[0] = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
+	r[1] = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
+	r[2] = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
+	r[3] = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
 
 /* Points index[0..16) into a register per coordinate, lane k holding point index[k]. */
 static inline void gather16(const plait_point *points, const int *index, __m512 *x, __m512 *y, __m512 *z,
@@ -20,12 +43,7 @@ static inline void gather16(const plait_point *points, const int *index, __m512 
 		v = _mm512_insertf32x4(v, _mm_load_ps(&points[index[m + 8]].x.x), 2);
 		r[m] = _mm512_insertf32x4(v, _mm_load_ps(&points[index[m + 12]].x.x), 3);
 	}
-	__m512 t0 = _mm512_unpacklo_ps(r[0], r[1]), t1 = _mm512_unpacklo_ps(r[2], r[3]);
-	__m512 t2 = _mm512_unpackhi_ps(r[0], r[1]), t3 = _mm512_unpackhi_ps(r[2], r[3]);
-	*x = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0));
-	*y = _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2));
-	*z = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0));
-	*w = _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2));
+	transpose_points16(r, x, y, z, w);
 }
 
 /* The inverse of gather16 (a 4x4 transpose is its own inverse), storing the first `count`
@@ -34,12 +52,8 @@ static inline void gather16(const plait_point *points, const int *index, __m512 
 static inline void scatter16(plait_point *points, const int *index, int count, __m512 x, __m512 y, __m512 z,
                              __m512 w)
 {
-	__m512 t0 = _mm512_unpacklo_ps(x, y), t1 = _mm512_unpacklo_ps(z, w);
-	__m512 t2 = _mm512_unpackhi_ps(x, y), t3 = _mm512_unpackhi_ps(z, w);
-	__m512 r[4] = {_mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)),
-	               _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2))};
+	__m512 r[4];
+	untranspose_points16(x, y, z, w, r);
 	if (count == 16) {
 		for (int m = 0; m < 4; ++m) {
 			_mm_store_ps(&points[index[m]].x.x, _mm512_castps512_ps128(r[m]));
@@ -72,32 +86,27 @@ static inline void load_points16(const plait_point *points, int first, __m512 *x
                                  __m512 *w)
 {
 	const float *f = &points[first].x.x;
-	__m512 r0 = _mm512_loadu_ps(f), r1 = _mm512_loadu_ps(f + 16);
-	__m512 r2 = _mm512_loadu_ps(f + 32), r3 = _mm512_loadu_ps(f + 48);
-	__m512 t0 = _mm512_unpacklo_ps(r0, r1), t1 = _mm512_unpacklo_ps(r2, r3);
-	__m512 t2 = _mm512_unpackhi_ps(r0, r1), t3 = _mm512_unpackhi_ps(r2, r3);
+	__m512 r[4] = {_mm512_loadu_ps(f), _mm512_loadu_ps(f + 16), _mm512_loadu_ps(f + 32),
+	               _mm512_loadu_ps(f + 48)};
+	transpose_points16(r, x, y, z, w);
 	const __m512i lanes = POINT_LANES;
-	*x = _mm512_permutexvar_ps(lanes, _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)));
-	*y = _mm512_permutexvar_ps(lanes, _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)));
-	*z = _mm512_permutexvar_ps(lanes, _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)));
-	*w = _mm512_permutexvar_ps(lanes, _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2)));
+	*x = _mm512_permutexvar_ps(lanes, *x);
+	*y = _mm512_permutexvar_ps(lanes, *y);
+	*z = _mm512_permutexvar_ps(lanes, *z);
+	*w = _mm512_permutexvar_ps(lanes, *w);
 }
 
 /* The inverse of load_points16. */
 static inline void store_points16(plait_point *points, int first, __m512 x, __m512 y, __m512 z, __m512 w)
 {
 	const __m512i lanes = POINT_LANES;
-	x = _mm512_permutexvar_ps(lanes, x);
-	y = _mm512_permutexvar_ps(lanes, y);
-	z = _mm512_permutexvar_ps(lanes, z);
-	w = _mm512_permutexvar_ps(lanes, w);
-	__m512 t0 = _mm512_unpacklo_ps(x, y), t1 = _mm512_unpacklo_ps(z, w);
-	__m512 t2 = _mm512_unpackhi_ps(x, y), t3 = _mm512_unpackhi_ps(z, w);
+	__m512 r[4];
+	untranspose_points16(_mm512_permutexvar_ps(lanes, x), _mm512_permutexvar_ps(lanes, y),
+	                     _mm512_permutexvar_ps(lanes, z), _mm512_permutexvar_ps(lanes, w), r);
 	float *f = &points[first].x.x;
-	_mm512_storeu_ps(f, _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(1, 0, 1, 0)));
-	_mm512_storeu_ps(f + 16, _mm512_shuffle_ps(t0, t1, _MM_SHUFFLE(3, 2, 3, 2)));
-	_mm512_storeu_ps(f + 32, _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(1, 0, 1, 0)));
-	_mm512_storeu_ps(f + 48, _mm512_shuffle_ps(t2, t3, _MM_SHUFFLE(3, 2, 3, 2)));
+	for (int m = 0; m < 4; ++m) {
+		_mm512_storeu_ps(f + 16 * m, r[m]);
+	}
 }
 
 /* Sixteen vec3 (48 floats) into a register per coordinate: coordinate k of vector j is float
