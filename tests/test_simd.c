@@ -6,10 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dynamics/batch_layout.h"
 #include "dynamics/colouring.h"
 #include "dynamics/bend_kernel.h"
 #include "dynamics/distance_kernel.h"
 #include "test_support.h"
+#include "world/world.h"
 
 static const plait_simd levels[] = {PLAIT_SIMD_SCALAR, PLAIT_SIMD_AVX2, PLAIT_SIMD_AVX512};
 
@@ -76,13 +78,16 @@ typedef void block_maker(plait_distance_block *block, plait_point *points, int c
                          bool rigid);
 
 /* A block of count constraints over point_count points from `make`, swept five times by every
- * kernel the processor runs (over [0, split) and then [split, count)): each must leave the
- * portable kernel's positions and multipliers, bit for bit. */
+ * kernel the processor runs (over [0, split) and then [split, count)), with the batch layouts
+ * kept as colouring keeps them (the two ranges as its runs) and without (every batch gathered):
+ * each must leave the portable kernel's positions and multipliers, bit for bit. */
 static void check_kernels(block_maker *make, int count, int point_count, int split, uint32_t seed, bool rigid)
 {
 	plait_point *reference = malloc(sizeof *reference * (size_t)point_count);
 	float *reference_lambda = malloc(sizeof(float) * (size_t)count);
-	for (int l = 0; l < 3; ++l) {
+	for (int pass = 0; pass < 2 * 3; ++pass) {
+		int l = pass / 2;
+		bool keep_layouts = pass % 2 == 1;
 		if (!plait_simd_supported(levels[l])) {
 			cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
 			continue;
@@ -95,6 +100,13 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 		memset(points, 0, bytes); /* points the maker leaves alone compare equal */
 		make(&block, points, count, seed, rigid);
 		cr_assert_eq(block.compliant_count == 0, rigid);
+		int run_start[3] = {0, split, count}, region_start[2] = {0, 2};
+		unsigned char *layouts = calloc((size_t)count, 1);
+		if (keep_layouts) {
+			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL};
+			plait_find_batch_layouts(&block, layouts);
+			block.colouring.batch_layout = layouts;
+		}
 		plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
 		for (int sweep = 0; sweep < 5; ++sweep) {
 			kernel(&block, points, 0, split, 3600.0f);
@@ -103,19 +115,21 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 		for (int i = 0; i < point_count; ++i) {
 			cr_assert(isfinite(points[i].x.x) && isfinite(points[i].x.y) && isfinite(points[i].x.z));
 		}
-		if (l == 0) {
+		if (pass == 0) {
 			memcpy(reference, points, sizeof *reference * (size_t)point_count);
 			memcpy(reference_lambda, block.lambda, sizeof(float) * (size_t)count);
 		} else {
 			for (int i = 0; i < point_count; ++i) {
-				cr_assert(
-				    memcmp(&reference[i], &points[i], sizeof *points) == 0,
-				    "level %d differs from the portable kernel at point %d of %d constraints (rigid %d)",
-				    (int)levels[l], i, count, (int)rigid);
+				cr_assert(memcmp(&reference[i], &points[i], sizeof *points) == 0,
+				          "level %d (layouts kept %d) differs from the portable kernel at point %d of %d "
+				          "constraints (rigid %d)",
+				          (int)levels[l], (int)keep_layouts, i, count, (int)rigid);
 			}
 			cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
-			          "level %d multipliers differ at %d constraints", (int)levels[l], count);
+			          "level %d (layouts kept %d) multipliers differ at %d constraints", (int)levels[l],
+			          (int)keep_layouts, count);
 		}
+		free(layouts);
 		free_block(&block);
 		free(points);
 	}
@@ -229,6 +243,95 @@ Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
 		check_kernels(make_layout_block, count, layout_point_count(count), FILLERS, 777u + (uint32_t)count,
 		              n % 2 == 1);
 	}
+}
+
+/* The layouts found for make_layout_block's batches are the ones it laid out: whole for 16
+ * lanes, and for each half of 8 (the moved lane spoils only its own half). */
+Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
+{
+	const plait_batch_layout whole[LAYOUT_KINDS] = {
+	    PLAIT_LAYOUT_RUNS,   PLAIT_LAYOUT_RUNS,  PLAIT_LAYOUT_PAIRS,  PLAIT_LAYOUT_PAIRS,
+	    PLAIT_LAYOUT_SHEAR,  PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER,
+	    PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER};
+	/* Kinds 6, 7 and 8 move a point of lane 15, 7 and 10. */
+	const plait_batch_layout halves[LAYOUT_KINDS][2] = {
+	    {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_RUNS},    {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_RUNS},
+	    {PLAIT_LAYOUT_PAIRS, PLAIT_LAYOUT_PAIRS},  {PLAIT_LAYOUT_PAIRS, PLAIT_LAYOUT_PAIRS},
+	    {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_SHEAR},  {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_SHEAR},
+	    {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_GATHER},  {PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_PAIRS},
+	    {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_GATHER}, {PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER}};
+	int count = FILLERS + 16 * LAYOUT_KINDS;
+	plait_distance_block block;
+	memset(&block, 0, sizeof block);
+	plait_point *points = calloc((size_t)layout_point_count(count), sizeof *points);
+	make_layout_block(&block, points, count, 5u, false);
+	for (int batch = 0; batch < LAYOUT_KINDS; ++batch) {
+		const uint32_t *offset = block.point_offset[FILLERS + 16 * batch];
+		cr_assert_eq(plait_batch_layout_of(offset, 16), whole[batch], "batch %d", batch);
+		cr_assert_eq(plait_batch_layout_of(offset, 8), halves[batch][0], "batch %d, first half", batch);
+		cr_assert_eq(plait_batch_layout_of(offset + 16, 8), halves[batch][1], "batch %d, second half", batch);
+	}
+	/* Kept per position: batches start a multiple of 16 (8) after their run's start. */
+	int run_start[3] = {0, FILLERS, count}, region_start[2] = {0, 2};
+	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL};
+	unsigned char *kept = malloc((size_t)count);
+	memset(kept, 0xff, (size_t)count);
+	plait_find_batch_layouts(&block, kept);
+	for (int c = 0; c < count; ++c) {
+		int k = c - FILLERS;
+		plait_batch_layout expect16 = k >= 0 && k % 16 == 0 ? whole[k / 16] : PLAIT_LAYOUT_GATHER;
+		plait_batch_layout expect8 = k >= 0 && k % 8 == 0 ? halves[k / 16][k % 16 / 8] : PLAIT_LAYOUT_GATHER;
+		cr_assert_eq(plait_layout16(kept[c]), expect16, "position %d", c);
+		cr_assert_eq(plait_layout8(kept[c]), expect8, "position %d", c);
+	}
+	free(kept);
+	free_block(&block);
+	free(points);
+}
+
+/* Once coloured, a grid cloth's distance blocks keep the layout of each batch that starts a
+ * multiple of 16 (8) after its run's start and ends in it, as plait_batch_layout_of finds it, and
+ * gathered elsewhere; and most of their batches (62% at 128 x 128) are kept in a layout of runs. */
+Test(simd, a_coloured_cloth_keeps_the_layouts_of_its_batches)
+{
+	plait_world_def wdef = plait_default_world_def();
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	test_grid grid = test_grid_make(128, 128, 2.0f, 2.0f);
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.bend_model = PLAIT_BEND_DISTANCE;
+	cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, NULL)));
+	cr_assert(test_step_frames(world, 1));
+	plait_sim *sim = &world.world->sim;
+	plait_distance_block *blocks[3] = {&sim->stretch, &sim->shear, &sim->bend_distance};
+	int all_batches = 0, all_laid_out = 0;
+	for (int b = 0; b < 3; ++b) {
+		const plait_colouring *colouring = &blocks[b]->colouring;
+		cr_assert(colouring->run_count > 0 && colouring->batch_layout != NULL, "block %d", b);
+		int batches = 0, laid_out = 0;
+		for (int run = 0; run < colouring->run_count; ++run) {
+			int begin = colouring->run_start[run], end = colouring->run_start[run + 1];
+			for (int c = begin; c < end; ++c) {
+				const uint32_t *offset = blocks[b]->point_offset[c];
+				bool whole = (c - begin) % 16 == 0 && c + 16 <= end,
+				     half = (c - begin) % 8 == 0 && c + 8 <= end;
+				plait_batch_layout expect16 = whole ? plait_batch_layout_of(offset, 16) : PLAIT_LAYOUT_GATHER;
+				plait_batch_layout expect8 = half ? plait_batch_layout_of(offset, 8) : PLAIT_LAYOUT_GATHER;
+				cr_assert_eq(plait_layout16(colouring->batch_layout[c]), expect16, "block %d, position %d", b,
+				             c);
+				cr_assert_eq(plait_layout8(colouring->batch_layout[c]), expect8, "block %d, position %d", b,
+				             c);
+				batches += whole;
+				laid_out += expect16 != PLAIT_LAYOUT_GATHER;
+			}
+		}
+		cr_log_info("block %d: %d of %d batches of 16 laid out", b, laid_out, batches);
+		all_batches += batches;
+		all_laid_out += laid_out;
+	}
+	cr_assert(all_laid_out * 2 > all_batches, "%d of %d batches laid out", all_laid_out, all_batches);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
 }
 
 /* Hinges with disjoint corners, folded at random angles, some pinned, one degenerate (its

@@ -3,12 +3,15 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "dynamics/batch_layout.h"
+
 #define NO_COLOUR (-1)
 
 void plait_colouring_clear(plait_colouring *colouring, const plait_allocator *allocator)
 {
 	plait_free(allocator, colouring->region_start);
 	plait_free(allocator, colouring->run_start);
+	plait_free(allocator, colouring->batch_layout);
 	memset(colouring, 0, sizeof *colouring);
 }
 
@@ -192,6 +195,7 @@ bool plait_sim_colour(plait_sim *sim)
 	}
 	char *scratch = plait_alloc(a, sizeof bend->quad[0] * (size_t)largest);
 	int *orders[BLOCKS] = {NULL, NULL, NULL, NULL};
+	unsigned char *layouts[DISTANCE_BLOCKS] = {NULL, NULL, NULL};
 	plait_colouring colourings[BLOCKS];
 	memset(colourings, 0, sizeof colourings);
 	bool ok = scratch != NULL;
@@ -199,6 +203,10 @@ bool plait_sim_colour(plait_sim *sim)
 		orders[k] = plait_alloc(a, sizeof(int) * (size_t)(counts[k] > 0 ? counts[k] : 1));
 		ok = orders[k] != NULL && plait_colour_constraints(a, tuples[k], arity[k], counts[k],
 		                                                   sim->particles.count, orders[k], &colourings[k]);
+	}
+	for (int k = 0; k < DISTANCE_BLOCKS && ok; ++k) {
+		layouts[k] = plait_alloc(a, (size_t)(counts[k] > 0 ? counts[k] : 1));
+		ok = layouts[k] != NULL;
 	}
 	if (ok) {
 		for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
@@ -211,6 +219,9 @@ bool plait_sim_colour(plait_sim *sim)
 			permute(scratch, b->lambda, sizeof(float), b->count, orders[k]);
 			plait_colouring_clear(&b->colouring, a);
 			b->colouring = colourings[k];
+			b->colouring.batch_layout = layouts[k];
+			layouts[k] = NULL;
+			plait_find_batch_layouts(b, b->colouring.batch_layout);
 		}
 		const int *order = orders[DISTANCE_BLOCKS];
 		permute(scratch, bend->quad, sizeof *bend->quad, bend->count, order);
@@ -224,6 +235,9 @@ bool plait_sim_colour(plait_sim *sim)
 		for (int k = 0; k < BLOCKS; ++k) {
 			plait_colouring_clear(&colourings[k], a);
 		}
+	}
+	for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
+		plait_free(a, layouts[k]);
 	}
 	for (int k = 0; k < BLOCKS; ++k) {
 		plait_free(a, orders[k]);

@@ -5,6 +5,7 @@
 #if PLAIT_X86_KERNELS
 #include <immintrin.h>
 
+#include "dynamics/batch_layout.h"
 #include "dynamics/points_avx2.h"
 
 /* Masked moves are slow on some processors (a masked store is microcoded on AMD's): full
@@ -25,59 +26,26 @@ static inline void store_lanes(float *to, __m256i lanes, int count, __m256 value
 
 /* Full batches whose 16 points lie in runs of consecutive points move them with 256-bit loads
  * and stores (two points each) instead of 128-bit ones and their inserts and extracts, as the
- * AVX-512 kernel does (distance_avx512.c, which describes the layouts). Here all three leave
+ * AVX-512 kernel does (the layouts: batch_layout.h). Here all three leave
  * lane 4 h + m holding constraint 2 m + h (RUN_LANES); each lane's arithmetic is unchanged, so
  * are the bits. */
-typedef enum batch_layout { LAYOUT_GATHER, LAYOUT_RUNS, LAYOUT_PAIRS, LAYOUT_SHEAR } batch_layout;
-
-static inline batch_layout layout_of(const uint32_t *offset)
-{
-	__m256i low = _mm256_loadu_si256((const __m256i *)offset);
-	__m256i high = _mm256_loadu_si256((const __m256i *)(offset + 8));
-	const __m256i half = _mm256_set1_epi32(64); /* 4 points on */
-	__m256i a = _mm256_set1_epi32((int)offset[0]);
-	/* RUNS: pairs (a + 16 k, b + 16 k). */
-	__m256i expect = _mm256_add_epi32(_mm256_blend_epi32(a, _mm256_set1_epi32((int)offset[1]), 0xAA),
-	                                  _mm256_setr_epi32(0, 0, 16, 16, 32, 32, 48, 48));
-	__m256i differ = _mm256_or_si256(_mm256_xor_si256(low, expect),
-	                                 _mm256_xor_si256(high, _mm256_add_epi32(expect, half)));
-	if (_mm256_testz_si256(differ, differ)) {
-		return LAYOUT_RUNS;
-	}
-	/* PAIRS: a + 16 n for n = 0..15. */
-	expect = _mm256_add_epi32(a, _mm256_setr_epi32(0, 16, 32, 48, 64, 80, 96, 112));
-	differ = _mm256_or_si256(_mm256_xor_si256(low, expect),
-	                         _mm256_xor_si256(high, _mm256_add_epi32(expect, _mm256_set1_epi32(128))));
-	if (_mm256_testz_si256(differ, differ)) {
-		return LAYOUT_PAIRS;
-	}
-	/* SHEAR: (a, b1 + 16), (b1, a + 16), then the same 32 bytes on. */
-	expect = _mm256_add_epi32(_mm256_blend_epi32(a, _mm256_set1_epi32((int)offset[2]), 0x66),
-	                          _mm256_setr_epi32(0, 16, 0, 16, 32, 48, 32, 48));
-	differ = _mm256_or_si256(_mm256_xor_si256(low, expect),
-	                         _mm256_xor_si256(high, _mm256_add_epi32(expect, half)));
-	if (_mm256_testz_si256(differ, differ)) {
-		return LAYOUT_SHEAR;
-	}
-	return LAYOUT_GATHER;
-}
 
 /* Lane 4 h + m holds constraint 2 m + h; constraint k is in lane RUN_SLOTS[k]. */
 #define RUN_LANES _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7)
 #define RUN_SLOTS _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7)
 
 /* A per-constraint array's 8 values from `from` in the layout's lane order. */
-static inline __m256 load_values(const float *from, batch_layout layout, __m256i lanes, int count)
+static inline __m256 load_values(const float *from, plait_batch_layout layout, __m256i lanes, int count)
 {
-	if (layout == LAYOUT_GATHER) {
+	if (layout == PLAIT_LAYOUT_GATHER) {
 		return load_lanes(from, lanes, count);
 	}
 	return _mm256_permutevar8x32_ps(_mm256_loadu_ps(from), RUN_LANES);
 }
 
-static inline void store_values(float *to, batch_layout layout, __m256i lanes, int count, __m256 values)
+static inline void store_values(float *to, plait_batch_layout layout, __m256i lanes, int count, __m256 values)
 {
-	if (layout == LAYOUT_GATHER) {
+	if (layout == PLAIT_LAYOUT_GATHER) {
 		store_lanes(to, lanes, count, values);
 	} else {
 		_mm256_storeu_ps(to, _mm256_permutevar8x32_ps(values, RUN_SLOTS));
@@ -109,17 +77,17 @@ static inline void untranspose_halves(__m256 x, __m256 y, __m256 z, __m256 w, __
 /* Both sides of a batch in a run layout, half h of i[m] and j[m] holding the points of
  * constraint 2 m + h. (_mm256_permute2f128_ps picks halves: 0 and 1 the first source's, 2 and
  * 3 the second's, low nibble for the low half.) */
-static inline void load_halves(plait_point *points, const uint32_t *offset, batch_layout layout, __m256 i[4],
-                               __m256 j[4])
+static inline void load_halves(plait_point *points, const uint32_t *offset, plait_batch_layout layout,
+                               __m256 i[4], __m256 j[4])
 {
 	const float *a = point_at(points, offset[0]);
-	if (layout == LAYOUT_RUNS) {
+	if (layout == PLAIT_LAYOUT_RUNS) {
 		const float *b = point_at(points, offset[1]);
 		for (int m = 0; m < 4; ++m) {
 			i[m] = _mm256_loadu_ps(a + 8 * m);
 			j[m] = _mm256_loadu_ps(b + 8 * m);
 		}
-	} else if (layout == LAYOUT_PAIRS) {
+	} else if (layout == PLAIT_LAYOUT_PAIRS) {
 		for (int m = 0; m < 4; ++m) {
 			__m256 first = _mm256_loadu_ps(a + 16 * m), second = _mm256_loadu_ps(a + 16 * m + 8);
 			i[m] = _mm256_permute2f128_ps(first, second, 0x20);
@@ -136,17 +104,17 @@ static inline void load_halves(plait_point *points, const uint32_t *offset, batc
 }
 
 /* The inverse of load_halves. */
-static inline void store_halves(plait_point *points, const uint32_t *offset, batch_layout layout,
+static inline void store_halves(plait_point *points, const uint32_t *offset, plait_batch_layout layout,
                                 const __m256 i[4], const __m256 j[4])
 {
 	float *a = (float *)point_at(points, offset[0]);
-	if (layout == LAYOUT_RUNS) {
+	if (layout == PLAIT_LAYOUT_RUNS) {
 		float *b = (float *)point_at(points, offset[1]);
 		for (int m = 0; m < 4; ++m) {
 			_mm256_storeu_ps(a + 8 * m, i[m]);
 			_mm256_storeu_ps(b + 8 * m, j[m]);
 		}
-	} else if (layout == LAYOUT_PAIRS) {
+	} else if (layout == PLAIT_LAYOUT_PAIRS) {
 		for (int m = 0; m < 4; ++m) {
 			_mm256_storeu_ps(a + 16 * m, _mm256_permute2f128_ps(i[m], j[m], 0x20));
 			_mm256_storeu_ps(a + 16 * m + 8, _mm256_permute2f128_ps(i[m], j[m], 0x31));
@@ -164,7 +132,7 @@ static inline void store_halves(plait_point *points, const uint32_t *offset, bat
  * 0, are masked out of the block's arrays and are not written back. */
 static inline __attribute__((always_inline)) void project8(plait_distance_block *block, plait_point *points,
                                                            int c, int count, __m256 ih2, bool rigid,
-                                                           batch_layout layout)
+                                                           plait_batch_layout layout)
 {
 	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
 	const __m256 negative_zero = _mm256_set1_ps(-0.0f), tiny = _mm256_set1_ps(1e-12f);
@@ -184,7 +152,7 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 		offset = short_offset;
 	}
 	__m256 xi, yi, zi, wi, xj, yj, zj, wj;
-	if (layout != LAYOUT_GATHER) {
+	if (layout != PLAIT_LAYOUT_GATHER) {
 		__m256 ri[4], rj[4];
 		load_halves(points, offset, layout, ri, rj);
 		transpose_halves(ri, &xi, &yi, &zi, &wi);
@@ -232,7 +200,7 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 	xj = _mm256_add_ps(xj, _mm256_mul_ps(sj, dx));
 	yj = _mm256_add_ps(yj, _mm256_mul_ps(sj, dy));
 	zj = _mm256_add_ps(zj, _mm256_mul_ps(sj, dz));
-	if (layout != LAYOUT_GATHER) {
+	if (layout != PLAIT_LAYOUT_GATHER) {
 		__m256 ri[4], rj[4];
 		untranspose_halves(xi, yi, zi, wi, ri);
 		untranspose_halves(xj, yj, zj, wj, rj);
@@ -253,21 +221,22 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 
 /* A full batch, in its layout: a case for each, so that each gets its own copy of project8 with
  * the layout a constant. */
-static inline __attribute__((always_inline)) void
-project_full8(plait_distance_block *block, plait_point *points, int c, __m256 ih2, bool rigid)
+static inline __attribute__((always_inline)) void project_full8(plait_distance_block *block,
+                                                                plait_point *points, int c, __m256 ih2,
+                                                                bool rigid, plait_batch_layout layout)
 {
-	switch (layout_of(block->point_offset[c])) {
-	case LAYOUT_RUNS:
-		project8(block, points, c, 8, ih2, rigid, LAYOUT_RUNS);
+	switch (layout) {
+	case PLAIT_LAYOUT_RUNS:
+		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_RUNS);
 		break;
-	case LAYOUT_PAIRS:
-		project8(block, points, c, 8, ih2, rigid, LAYOUT_PAIRS);
+	case PLAIT_LAYOUT_PAIRS:
+		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_PAIRS);
 		break;
-	case LAYOUT_SHEAR:
-		project8(block, points, c, 8, ih2, rigid, LAYOUT_SHEAR);
+	case PLAIT_LAYOUT_SHEAR:
+		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_SHEAR);
 		break;
-	case LAYOUT_GATHER:
-		project8(block, points, c, 8, ih2, rigid, LAYOUT_GATHER);
+	case PLAIT_LAYOUT_GATHER:
+		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_GATHER);
 		break;
 	}
 }
@@ -277,19 +246,22 @@ void plait_project_distance_avx2(plait_distance_block *block, plait_point *point
 {
 	const __m256 ih2 = _mm256_set1_ps(inverse_h_squared);
 	int c = begin;
+	const unsigned char *kept = block->colouring.batch_layout;
 	if (block->compliant_count == 0) {
 		for (; c + 8 <= end; c += 8) {
-			project_full8(block, points, c, ih2, true);
+			project_full8(block, points, c, ih2, true,
+			              kept != NULL ? plait_layout8(kept[c]) : PLAIT_LAYOUT_GATHER);
 		}
 		if (c < end) {
-			project8(block, points, c, end - c, ih2, true, LAYOUT_GATHER);
+			project8(block, points, c, end - c, ih2, true, PLAIT_LAYOUT_GATHER);
 		}
 	} else {
 		for (; c + 8 <= end; c += 8) {
-			project_full8(block, points, c, ih2, false);
+			project_full8(block, points, c, ih2, false,
+			              kept != NULL ? plait_layout8(kept[c]) : PLAIT_LAYOUT_GATHER);
 		}
 		if (c < end) {
-			project8(block, points, c, end - c, ih2, false, LAYOUT_GATHER);
+			project8(block, points, c, end - c, ih2, false, PLAIT_LAYOUT_GATHER);
 		}
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them

@@ -6,6 +6,7 @@
 #if PLAIT_X86_KERNELS
 #include <immintrin.h>
 
+#include "dynamics/batch_layout.h"
 #include "dynamics/points_avx512.h"
 
 /* Points by byte offset (plait_point_offset). */
@@ -64,50 +65,12 @@ static inline void scatter16_at(plait_point *points, const uint32_t *offset, int
 	}
 }
 
-/* Batches whose 32 points lie in runs of consecutive points (about four in five full batches
- * of a grid cloth) move them with full-width loads and stores and a few block permutes instead
- * of sixteen 128-bit loads and stores a side and their inserts and extracts: the kernel is
- * bound by those shuffles (on Zen 4 a 512-bit shuffle takes two of its shuffle slots). The lanes
- * then hold the constraints in another order (BLOCK_LANES), the same on both sides and for
- * the rest lengths; each lane's arithmetic is unchanged, so are the bits. Three layouts, with
- * a = the first constraint's first point, b = its second, b1 = the second constraint's first:
- *   RUNS:  constraint k joins a + k and b + k (edges across rows, bend and shear along them);
- *   PAIRS: constraint k joins a + 2k and a + 2k + 1 (every other edge along a row);
- *   SHEAR: constraint 2m joins a + 2m and b1 + 2m + 1, constraint 2m + 1 joins b1 + 2m and
- *          a + 2m + 1 (the two diagonals of a row of quads, alternating). */
-typedef enum batch_layout { LAYOUT_GATHER, LAYOUT_RUNS, LAYOUT_PAIRS, LAYOUT_SHEAR } batch_layout;
-
-/* The layout of the 16 constraints whose offset pairs start at `offset`. */
-static inline batch_layout layout_of(const uint32_t *offset)
-{
-	__m512i low = _mm512_loadu_si512(offset), high = _mm512_loadu_si512(offset + 16);
-	const __m512i half = _mm512_set1_epi32(128); /* 8 points on */
-	__m512i a = _mm512_set1_epi32((int)offset[0]);
-	/* RUNS: pairs (a + 16 k, b + 16 k). */
-	__m512i expect =
-	    _mm512_add_epi32(_mm512_mask_blend_epi32(0xAAAA, a, _mm512_set1_epi32((int)offset[1])),
-	                     _mm512_setr_epi32(0, 0, 16, 16, 32, 32, 48, 48, 64, 64, 80, 80, 96, 96, 112, 112));
-	if ((_mm512_cmpneq_epi32_mask(low, expect) |
-	     _mm512_cmpneq_epi32_mask(high, _mm512_add_epi32(expect, half))) == 0) {
-		return LAYOUT_RUNS;
-	}
-	/* PAIRS: a + 16 n for n = 0..31. */
-	expect = _mm512_add_epi32(
-	    a, _mm512_setr_epi32(0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192, 208, 224, 240));
-	if ((_mm512_cmpneq_epi32_mask(low, expect) |
-	     _mm512_cmpneq_epi32_mask(high, _mm512_add_epi32(expect, _mm512_set1_epi32(256)))) == 0) {
-		return LAYOUT_PAIRS;
-	}
-	/* SHEAR: (a, b1 + 16), (b1, a + 16), then the same 32 bytes on. */
-	expect =
-	    _mm512_add_epi32(_mm512_mask_blend_epi32(0x6666, a, _mm512_set1_epi32((int)offset[2])),
-	                     _mm512_setr_epi32(0, 16, 0, 16, 32, 48, 32, 48, 64, 80, 64, 80, 96, 112, 96, 112));
-	if ((_mm512_cmpneq_epi32_mask(low, expect) |
-	     _mm512_cmpneq_epi32_mask(high, _mm512_add_epi32(expect, half))) == 0) {
-		return LAYOUT_SHEAR;
-	}
-	return LAYOUT_GATHER;
-}
+/* Batches whose 32 points lie in runs of consecutive points (batch_layout.h; most full
+ * batches of a grid cloth) move them with full-width loads and stores and a few block
+ * permutes instead of sixteen 128-bit loads and stores a side and their inserts and extracts:
+ * the kernel is bound by those shuffles (on Zen 4 a 512-bit shuffle takes two of its shuffle
+ * slots). The lanes then hold the constraints in another order (BLOCK_LANES), the same on both
+ * sides and for the rest lengths; each lane's arithmetic is unchanged, so are the bits. */
 
 /* Lane 4 b + m of a batch in one of the run layouts holds its constraint 4 m + b. */
 #define BLOCK_LANES POINT_LANES
@@ -119,12 +82,12 @@ static inline batch_layout layout_of(const uint32_t *offset)
 
 /* The batch's 16 values of a per-constraint array from `from` (its first constraint), in the
  * layout's lane order; a gathered batch's first `count` (the rest zero). */
-static inline __m512 load_values(const float *from, batch_layout layout, __mmask16 lanes)
+static inline __m512 load_values(const float *from, plait_batch_layout layout, __mmask16 lanes)
 {
 	switch (layout) {
-	case LAYOUT_GATHER:
+	case PLAIT_LAYOUT_GATHER:
 		return _mm512_maskz_loadu_ps(lanes, from);
-	case LAYOUT_SHEAR:
+	case PLAIT_LAYOUT_SHEAR:
 		return _mm512_permutexvar_ps(SHEAR_LANES, _mm512_loadu_ps(from));
 	default:
 		return _mm512_permutexvar_ps(BLOCK_LANES, _mm512_loadu_ps(from));
@@ -132,13 +95,13 @@ static inline __m512 load_values(const float *from, batch_layout layout, __mmask
 }
 
 /* The inverse of load_values for the lanes in `update`. */
-static inline void store_values(float *to, batch_layout layout, __mmask16 update, __m512 values)
+static inline void store_values(float *to, plait_batch_layout layout, __mmask16 update, __m512 values)
 {
 	switch (layout) {
-	case LAYOUT_GATHER:
+	case PLAIT_LAYOUT_GATHER:
 		_mm512_mask_storeu_ps(to, update, values);
 		break;
-	case LAYOUT_SHEAR:
+	case PLAIT_LAYOUT_SHEAR:
 		_mm512_storeu_ps(to, _mm512_permutexvar_ps(SHEAR_SLOTS, values));
 		break;
 	default:
@@ -161,17 +124,17 @@ static inline void store_values(float *to, batch_layout layout, __mmask16 update
 /* Both sides of a batch in a run layout, block b of i[m] and j[m] holding the points of
  * constraint 4 m + b (BLOCK_LANES once transposed; in a shear batch, 4 m + (0, 2, 1, 3)[b]:
  * SHEAR_LANES). */
-static inline void load_blocks(plait_point *points, const uint32_t *offset, batch_layout layout, __m512 i[4],
-                               __m512 j[4])
+static inline void load_blocks(plait_point *points, const uint32_t *offset, plait_batch_layout layout,
+                               __m512 i[4], __m512 j[4])
 {
 	const float *a = point_at(points, offset[0]);
-	if (layout == LAYOUT_RUNS) {
+	if (layout == PLAIT_LAYOUT_RUNS) {
 		const float *b = point_at(points, offset[1]);
 		for (int m = 0; m < 4; ++m) {
 			i[m] = _mm512_loadu_ps(a + 16 * m);
 			j[m] = _mm512_loadu_ps(b + 16 * m);
 		}
-	} else if (layout == LAYOUT_PAIRS) {
+	} else if (layout == PLAIT_LAYOUT_PAIRS) {
 		for (int m = 0; m < 4; ++m) {
 			__m512 low = _mm512_loadu_ps(a + 32 * m), high = _mm512_loadu_ps(a + 32 * m + 16);
 			i[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(2, 0, 2, 0));
@@ -189,17 +152,17 @@ static inline void load_blocks(plait_point *points, const uint32_t *offset, batc
 }
 
 /* The inverse of load_blocks. */
-static inline void store_blocks(plait_point *points, const uint32_t *offset, batch_layout layout,
+static inline void store_blocks(plait_point *points, const uint32_t *offset, plait_batch_layout layout,
                                 const __m512 i[4], const __m512 j[4])
 {
 	float *a = point_at(points, offset[0]);
-	if (layout == LAYOUT_RUNS) {
+	if (layout == PLAIT_LAYOUT_RUNS) {
 		float *b = point_at(points, offset[1]);
 		for (int m = 0; m < 4; ++m) {
 			_mm512_storeu_ps(a + 16 * m, i[m]);
 			_mm512_storeu_ps(b + 16 * m, j[m]);
 		}
-	} else if (layout == LAYOUT_PAIRS) {
+	} else if (layout == PLAIT_LAYOUT_PAIRS) {
 		const __m512i first = BLOCKS(FIRST(0), SECOND(0), FIRST(1), SECOND(1));
 		const __m512i second = BLOCKS(FIRST(2), SECOND(2), FIRST(3), SECOND(3));
 		for (int m = 0; m < 4; ++m) {
@@ -223,7 +186,7 @@ static inline void store_blocks(plait_point *points, const uint32_t *offset, bat
  * compute without effect and write their points back unchanged, which no other lane touches. */
 static inline __attribute__((always_inline)) void project16(plait_distance_block *block, plait_point *points,
                                                             int c, int count, int skip, bool tail, __m512 ih2,
-                                                            bool rigid, batch_layout layout)
+                                                            bool rigid, plait_batch_layout layout)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
 	const __m512 negative_zero = _mm512_set1_ps(-0.0f), tiny = _mm512_set1_ps(1e-12f);
@@ -243,7 +206,7 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		offset = short_offset;
 	}
 	__m512 xi, yi, zi, wi, xj, yj, zj, wj;
-	if (layout != LAYOUT_GATHER) {
+	if (layout != PLAIT_LAYOUT_GATHER) {
 		__m512 ri[4], rj[4];
 		load_blocks(points, offset, layout, ri, rj);
 		transpose_points16(ri, &xi, &yi, &zi, &wi);
@@ -292,7 +255,7 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 	xj = _mm512_mask_add_ps(xj, update, xj, _mm512_mul_ps(sj, dx));
 	yj = _mm512_mask_add_ps(yj, update, yj, _mm512_mul_ps(sj, dy));
 	zj = _mm512_mask_add_ps(zj, update, zj, _mm512_mul_ps(sj, dz));
-	if (layout != LAYOUT_GATHER) {
+	if (layout != PLAIT_LAYOUT_GATHER) {
 		__m512 ri[4], rj[4];
 		untranspose_points16(xi, yi, zi, wi, ri);
 		untranspose_points16(xj, yj, zj, wj, rj);
@@ -305,21 +268,22 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 
 /* A full batch, in its layout: a case for each, so that each gets its own copy of project16 with
  * the layout a constant. */
-static inline __attribute__((always_inline)) void
-project_full16(plait_distance_block *block, plait_point *points, int c, __m512 ih2, bool rigid)
+static inline __attribute__((always_inline)) void project_full16(plait_distance_block *block,
+                                                                 plait_point *points, int c, __m512 ih2,
+                                                                 bool rigid, plait_batch_layout layout)
 {
-	switch (layout_of(block->point_offset[c])) {
-	case LAYOUT_RUNS:
-		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_RUNS);
+	switch (layout) {
+	case PLAIT_LAYOUT_RUNS:
+		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_RUNS);
 		break;
-	case LAYOUT_PAIRS:
-		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_PAIRS);
+	case PLAIT_LAYOUT_PAIRS:
+		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_PAIRS);
 		break;
-	case LAYOUT_SHEAR:
-		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_SHEAR);
+	case PLAIT_LAYOUT_SHEAR:
+		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_SHEAR);
 		break;
-	case LAYOUT_GATHER:
-		project16(block, points, c, 16, 0, false, ih2, rigid, LAYOUT_GATHER);
+	case PLAIT_LAYOUT_GATHER:
+		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_GATHER);
 		break;
 	}
 }
@@ -330,28 +294,31 @@ void plait_project_distance_avx512(plait_distance_block *block, plait_point *poi
 	const __m512 ih2 = _mm512_set1_ps(inverse_h_squared);
 	int c = begin;
 	bool rigid = block->compliant_count == 0;
+	const unsigned char *kept = block->colouring.batch_layout;
 	/* A range of 16 or more ends with a full batch over its last 16, the lanes done already
 	 * skipped: a short batch's copies and masked moves cost about two full ones, and most
 	 * colour runs end in one. */
 	if (rigid) {
 		for (; c + 16 <= end; c += 16) {
-			project_full16(block, points, c, ih2, true);
+			project_full16(block, points, c, ih2, true,
+			               kept != NULL ? plait_layout16(kept[c]) : PLAIT_LAYOUT_GATHER);
 		}
 		if (c < end && end - begin >= 16) {
-			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, true, LAYOUT_GATHER);
+			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, true, PLAIT_LAYOUT_GATHER);
 			c = end;
 		}
 	} else {
 		for (; c + 16 <= end; c += 16) {
-			project_full16(block, points, c, ih2, false);
+			project_full16(block, points, c, ih2, false,
+			               kept != NULL ? plait_layout16(kept[c]) : PLAIT_LAYOUT_GATHER);
 		}
 		if (c < end && end - begin >= 16) {
-			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, false, LAYOUT_GATHER);
+			project16(block, points, end - 16, 16, c - (end - 16), true, ih2, false, PLAIT_LAYOUT_GATHER);
 			c = end;
 		}
 	}
 	if (c < end) {
-		project16(block, points, c, end - c, 0, false, ih2, rigid, LAYOUT_GATHER);
+		project16(block, points, c, end - c, 0, false, ih2, rigid, PLAIT_LAYOUT_GATHER);
 	}
 	/* Clean upper halves before returning to code built for SSE: the compiler leaves them
 	 * dirty when the remainder is a tail call, and SSE instructions after that carry a false

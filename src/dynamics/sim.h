@@ -128,6 +128,9 @@ typedef struct plait_colouring {
 	int region_count, run_count;
 	int *region_start; /* region_count + 1 entries */
 	int *run_start;    /* run_count + 1 entries */
+	/* Distance blocks: the layout of the SIMD batches from each coloured position
+	 * (dynamics/batch_layout.h), or NULL: every batch gathered. */
+	unsigned char *batch_layout;
 } plait_colouring;
 
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per

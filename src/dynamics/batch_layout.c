@@ -1,0 +1,41 @@
+#include "dynamics/batch_layout.h"
+
+#include <stdbool.h>
+
+#define STEP ((uint32_t)sizeof(plait_point)) /* one point on, in bytes */
+
+plait_batch_layout plait_batch_layout_of(const uint32_t *offset, int lanes)
+{
+	uint32_t a = offset[0], b = offset[1], b1 = offset[2];
+	bool runs = true, pairs = true, shear = true;
+	for (int k = 0; k < lanes; ++k) {
+		uint32_t on = STEP * (uint32_t)k;
+		runs = runs && offset[2 * k] == a + on && offset[2 * k + 1] == b + on;
+		pairs = pairs && offset[2 * k] == a + 2 * on && offset[2 * k + 1] == a + 2 * on + STEP;
+		/* Lane 2m + 1 is lane 2m's mirror: first and second points from the other run. */
+		uint32_t even = STEP * (uint32_t)(k & ~1);
+		uint32_t first = k % 2 == 0 ? a + even : b1 + even, second = k % 2 == 0 ? b1 + even : a + even;
+		shear = shear && offset[2 * k] == first && offset[2 * k + 1] == second + STEP;
+	}
+	return runs    ? PLAIT_LAYOUT_RUNS
+	       : pairs ? PLAIT_LAYOUT_PAIRS
+	       : shear ? PLAIT_LAYOUT_SHEAR
+	               : PLAIT_LAYOUT_GATHER;
+}
+
+void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *layout)
+{
+	const plait_colouring *colouring = &block->colouring;
+	for (int run = 0; run < colouring->run_count; ++run) {
+		int begin = colouring->run_start[run], end = colouring->run_start[run + 1];
+		for (int c = begin; c < end; ++c) {
+			layout[c] = 0;
+		}
+		for (int c = begin; c + 8 <= end; c += 8) {
+			layout[c] = (unsigned char)(plait_batch_layout_of(block->point_offset[c], 8) << 2);
+		}
+		for (int c = begin; c + 16 <= end; c += 16) {
+			layout[c] |= (unsigned char)plait_batch_layout_of(block->point_offset[c], 16);
+		}
+	}
+}

@@ -1,0 +1,50 @@
+/* Where the points of a SIMD batch of distance constraints lie: the vector kernels
+ * (distance_avx2.c, distance_avx512.c) move a batch whose points lie in runs of consecutive
+ * points with full-width loads and stores, and gather the others point by point. In a grid
+ * cloth most batches can lie in runs, in one of three layouts (a = the first constraint's
+ * first point, b = its second, b1 = the second constraint's first, k = the constraint's lane):
+ *   RUNS:  constraint k joins a + k and b + k (edges across rows, bend and shear along them);
+ *   PAIRS: constraint k joins a + 2k and a + 2k + 1 (every other edge along a row);
+ *   SHEAR: constraint 2m joins a + 2m and b1 + 2m + 1, constraint 2m + 1 joins b1 + 2m and
+ *          a + 2m + 1 (the two diagonals of a row of quads, alternating).
+ *
+ * Which layout a batch has depends on its constraints alone, so it is found once, when the
+ * block is coloured, and kept in the colouring (plait_colouring.batch_layout): a byte per
+ * position, whose bits 0-1 give the layout of the 16 constraints from there (AVX-512) and
+ * bits 2-3 that of the 8 (AVX2). Finding it at each projection took 6% of the kernel's time. */
+#ifndef PLAIT_DYNAMICS_BATCH_LAYOUT_H
+#define PLAIT_DYNAMICS_BATCH_LAYOUT_H
+
+#include <stdint.h>
+
+#include "dynamics/sim.h"
+
+typedef enum plait_batch_layout {
+	PLAIT_LAYOUT_GATHER, /* anything else: points loaded one by one */
+	PLAIT_LAYOUT_RUNS,
+	PLAIT_LAYOUT_PAIRS,
+	PLAIT_LAYOUT_SHEAR,
+} plait_batch_layout;
+
+/* The layouts kept for a position: 16 lanes from it, and 8. */
+static inline plait_batch_layout plait_layout16(unsigned char kept)
+{
+	return (plait_batch_layout)(kept & 3u);
+}
+
+static inline plait_batch_layout plait_layout8(unsigned char kept)
+{
+	return (plait_batch_layout)((kept >> 2) & 3u);
+}
+
+/* The layout of the `lanes` constraints (8 or 16) whose point offset pairs start at offset
+ * (plait_distance_block.point_offset[c]: constraint k's at offset[2 k] and offset[2 k + 1]). */
+plait_batch_layout plait_batch_layout_of(const uint32_t *offset, int lanes);
+
+/* layout[c] for every position of block's coloured runs (block->colouring): the layout of each
+ * batch of 16 that starts a multiple of 16 after its run's start and ends inside it, and the
+ * same for 8; zero (gather) elsewhere. layout holds plait_colouring_end(&block->colouring)
+ * bytes. */
+void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *layout);
+
+#endif
