@@ -148,16 +148,17 @@ Test(simd, every_kernel_gives_the_bits_of_the_portable_one)
 }
 
 /* Batches laid out as a grid cloth's colour runs often are, which the vector kernels move with
- * full-width loads and stores (distance_avx512.c): each 16 constraints a region of points of its
- * own, starting anywhere (not on a 64-byte line), taking in turn the three layouts, each with its
- * second run below its first or above it, a shuffled batch, and each layout but for one lane (its
- * first or second point moved to a free point of the region):
+ * full-width loads and stores (batch_layout.h): each 16 constraints a region of points of its
+ * own, starting anywhere (not on a 64-byte line), taking in turn the four layouts (the first three
+ * with their second run below their first or above it), a shuffled batch, and each layout but for
+ * one lane (its first or second point moved to a free point of the region):
  *   runs: constraint k joins a + k and b + k;
  *   neighbours: a + 2k and a + 2k + 1;
- *   diagonals: 2m joins a + 2m and b + 2m + 1, 2m + 1 joins b + 2m and a + 2m + 1.
+ *   diagonals: 2m joins a + 2m and b + 2m + 1, 2m + 1 joins b + 2m and a + 2m + 1;
+ *   skip-one: 2m joins a + 4m and a + 4m + 2, 2m + 1 joins a + 4m + 1 and a + 4m + 3.
  * One constraint of each batch has coincident ends and another both ends pinned. The count
  * leaves a tail batch and a remainder. */
-enum { LAYOUT_KINDS = 10, REGION_POINTS = 70 };
+enum { LAYOUT_KINDS = 12, REGION_POINTS = 70 };
 
 static void layout_pair(int kind, int k, int base, int *i, int *j)
 {
@@ -185,6 +186,11 @@ static void layout_pair(int kind, int k, int base, int *i, int *j)
 		if (kind == 8 && k == 10) {
 			*i = base + 67;
 		}
+		break;
+	case 10:
+	case 11: /* skip-one; 11: lane 5's second point moved */
+		*i = base + 4 * m + k % 2;
+		*j = kind == 11 && k == 5 ? base + 66 : *i + 2;
 		break;
 	default: /* shuffled: constraint k joins points 2k and 2k + 1 of a permutation */
 		*i = base + (int)((7u * (uint32_t)(2 * k) + 3u) % 32u);
@@ -250,16 +256,17 @@ Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
 Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
 {
 	const plait_batch_layout whole[LAYOUT_KINDS] = {
-	    PLAIT_LAYOUT_RUNS,   PLAIT_LAYOUT_RUNS,  PLAIT_LAYOUT_PAIRS,  PLAIT_LAYOUT_PAIRS,
-	    PLAIT_LAYOUT_SHEAR,  PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER,
-	    PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER};
-	/* Kinds 6, 7 and 8 move a point of lane 15, 7 and 10. */
+	    PLAIT_LAYOUT_RUNS,   PLAIT_LAYOUT_RUNS,   PLAIT_LAYOUT_PAIRS,  PLAIT_LAYOUT_PAIRS,
+	    PLAIT_LAYOUT_SHEAR,  PLAIT_LAYOUT_SHEAR,  PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER,
+	    PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_SKIP,   PLAIT_LAYOUT_GATHER};
+	/* Kinds 6, 7, 8 and 11 move a point of lane 15, 7, 10 and 5. */
 	const plait_batch_layout halves[LAYOUT_KINDS][2] = {
 	    {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_RUNS},    {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_RUNS},
 	    {PLAIT_LAYOUT_PAIRS, PLAIT_LAYOUT_PAIRS},  {PLAIT_LAYOUT_PAIRS, PLAIT_LAYOUT_PAIRS},
 	    {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_SHEAR},  {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_SHEAR},
 	    {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_GATHER},  {PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_PAIRS},
-	    {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_GATHER}, {PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER}};
+	    {PLAIT_LAYOUT_SHEAR, PLAIT_LAYOUT_GATHER}, {PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_GATHER},
+	    {PLAIT_LAYOUT_SKIP, PLAIT_LAYOUT_SKIP},    {PLAIT_LAYOUT_GATHER, PLAIT_LAYOUT_SKIP}};
 	int count = FILLERS + 16 * LAYOUT_KINDS;
 	plait_distance_block block;
 	memset(&block, 0, sizeof block);
@@ -291,7 +298,8 @@ Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
 
 /* Once coloured, a grid cloth's distance blocks keep the layout of each batch that starts a
  * multiple of 16 (8) after its run's start and ends in it, as plait_batch_layout_of finds it, and
- * gathered elsewhere; and most of their batches (62% at 128 x 128) are kept in a layout of runs. */
+ * gathered elsewhere; and most of each block's batches (68-78% at 128 x 128) are kept in a layout
+ * of runs. */
 Test(simd, a_coloured_cloth_keeps_the_layouts_of_its_batches)
 {
 	plait_world_def wdef = plait_default_world_def();
@@ -304,7 +312,6 @@ Test(simd, a_coloured_cloth_keeps_the_layouts_of_its_batches)
 	cr_assert(test_step_frames(world, 1));
 	plait_sim *sim = &world.world->sim;
 	plait_distance_block *blocks[3] = {&sim->stretch, &sim->shear, &sim->bend_distance};
-	int all_batches = 0, all_laid_out = 0;
 	for (int b = 0; b < 3; ++b) {
 		const plait_colouring *colouring = &blocks[b]->colouring;
 		cr_assert(colouring->run_count > 0 && colouring->batch_layout != NULL, "block %d", b);
@@ -326,10 +333,8 @@ Test(simd, a_coloured_cloth_keeps_the_layouts_of_its_batches)
 			}
 		}
 		cr_log_info("block %d: %d of %d batches of 16 laid out", b, laid_out, batches);
-		all_batches += batches;
-		all_laid_out += laid_out;
+		cr_assert(laid_out * 10 > batches * 6, "block %d: %d of %d batches laid out", b, laid_out, batches);
 	}
-	cr_assert(all_laid_out * 2 > all_batches, "%d of %d batches laid out", all_laid_out, all_batches);
 	plait_destroy_world(world);
 	test_grid_free(&grid);
 }

@@ -7,7 +7,7 @@
 plait_batch_layout plait_batch_layout_of(const uint32_t *offset, int lanes)
 {
 	uint32_t a = offset[0], b = offset[1], b1 = offset[2];
-	bool runs = true, pairs = true, shear = true;
+	bool runs = true, pairs = true, shear = true, skip = true;
 	for (int k = 0; k < lanes; ++k) {
 		uint32_t on = STEP * (uint32_t)k;
 		runs = runs && offset[2 * k] == a + on && offset[2 * k + 1] == b + on;
@@ -16,10 +16,13 @@ plait_batch_layout plait_batch_layout_of(const uint32_t *offset, int lanes)
 		uint32_t even = STEP * (uint32_t)(k & ~1);
 		uint32_t first = k % 2 == 0 ? a + even : b1 + even, second = k % 2 == 0 ? b1 + even : a + even;
 		shear = shear && offset[2 * k] == first && offset[2 * k + 1] == second + STEP;
+		uint32_t skipped = a + 2 * even + STEP * (uint32_t)(k % 2);
+		skip = skip && offset[2 * k] == skipped && offset[2 * k + 1] == skipped + 2 * STEP;
 	}
 	return runs    ? PLAIT_LAYOUT_RUNS
 	       : pairs ? PLAIT_LAYOUT_PAIRS
 	       : shear ? PLAIT_LAYOUT_SHEAR
+	       : skip  ? PLAIT_LAYOUT_SKIP
 	               : PLAIT_LAYOUT_GATHER;
 }
 
@@ -32,7 +35,7 @@ void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *
 			layout[c] = 0;
 		}
 		for (int c = begin; c + 8 <= end; c += 8) {
-			layout[c] = (unsigned char)(plait_batch_layout_of(block->point_offset[c], 8) << 2);
+			layout[c] = (unsigned char)(plait_batch_layout_of(block->point_offset[c], 8) << 3);
 		}
 		for (int c = begin; c + 16 <= end; c += 16) {
 			layout[c] |= (unsigned char)plait_batch_layout_of(block->point_offset[c], 16);

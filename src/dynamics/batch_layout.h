@@ -7,11 +7,13 @@
  *   PAIRS: constraint k joins a + 2k and a + 2k + 1 (every other edge along a row);
  *   SHEAR: constraint 2m joins a + 2m and b1 + 2m + 1, constraint 2m + 1 joins b1 + 2m and
  *          a + 2m + 1 (the two diagonals of a row of quads, alternating).
+ *   SKIP:  constraint 2m joins a + 4m and a + 4m + 2, constraint 2m + 1 joins a + 4m + 1 and
+ *          a + 4m + 3 (skip-one edges along a row, two on and two off).
  *
  * Which layout a batch has depends on its constraints alone, so it is found once, when the
  * block is coloured, and kept in the colouring (plait_colouring.batch_layout): a byte per
- * position, whose bits 0-1 give the layout of the 16 constraints from there (AVX-512) and
- * bits 2-3 that of the 8 (AVX2). Finding it at each projection took 6% of the kernel's time. */
+ * position, whose bits 0-2 give the layout of the 16 constraints from there (AVX-512) and
+ * bits 3-5 that of the 8 (AVX2). Finding it at each projection took 6% of the kernel's time. */
 #ifndef PLAIT_DYNAMICS_BATCH_LAYOUT_H
 #define PLAIT_DYNAMICS_BATCH_LAYOUT_H
 
@@ -24,17 +26,18 @@ typedef enum plait_batch_layout {
 	PLAIT_LAYOUT_RUNS,
 	PLAIT_LAYOUT_PAIRS,
 	PLAIT_LAYOUT_SHEAR,
+	PLAIT_LAYOUT_SKIP,
 } plait_batch_layout;
 
 /* The layouts kept for a position: 16 lanes from it, and 8. */
 static inline plait_batch_layout plait_layout16(unsigned char kept)
 {
-	return (plait_batch_layout)(kept & 3u);
+	return (plait_batch_layout)(kept & 7u);
 }
 
 static inline plait_batch_layout plait_layout8(unsigned char kept)
 {
-	return (plait_batch_layout)((kept >> 2) & 3u);
+	return (plait_batch_layout)((kept >> 3) & 7u);
 }
 
 /* The layout of the `lanes` constraints (8 or 16) whose point offset pairs start at offset

@@ -26,7 +26,7 @@ static inline void store_lanes(float *to, __m256i lanes, int count, __m256 value
 
 /* Full batches whose 16 points lie in runs of consecutive points move them with 256-bit loads
  * and stores (two points each) instead of 128-bit ones and their inserts and extracts, as the
- * AVX-512 kernel does (the layouts: batch_layout.h). Here all three leave
+ * AVX-512 kernel does (the layouts: batch_layout.h). Here all four leave
  * lane 4 h + m holding constraint 2 m + h (RUN_LANES); each lane's arithmetic is unchanged, so
  * are the bits. */
 
@@ -93,6 +93,12 @@ static inline void load_halves(plait_point *points, const uint32_t *offset, plai
 			i[m] = _mm256_permute2f128_ps(first, second, 0x20);
 			j[m] = _mm256_permute2f128_ps(first, second, 0x31);
 		}
+	} else if (layout == PLAIT_LAYOUT_SKIP) {
+		/* Points 4 m .. 4 m + 3: constraints 2 m and 2 m + 1 joining the first two to the last two. */
+		for (int m = 0; m < 4; ++m) {
+			i[m] = _mm256_loadu_ps(a + 16 * m);
+			j[m] = _mm256_loadu_ps(a + 16 * m + 8);
+		}
 	} else {
 		const float *b = point_at(points, offset[2]);
 		for (int m = 0; m < 4; ++m) {
@@ -118,6 +124,11 @@ static inline void store_halves(plait_point *points, const uint32_t *offset, pla
 		for (int m = 0; m < 4; ++m) {
 			_mm256_storeu_ps(a + 16 * m, _mm256_permute2f128_ps(i[m], j[m], 0x20));
 			_mm256_storeu_ps(a + 16 * m + 8, _mm256_permute2f128_ps(i[m], j[m], 0x31));
+		}
+	} else if (layout == PLAIT_LAYOUT_SKIP) {
+		for (int m = 0; m < 4; ++m) {
+			_mm256_storeu_ps(a + 16 * m, i[m]);
+			_mm256_storeu_ps(a + 16 * m + 8, j[m]);
 		}
 	} else {
 		float *b = (float *)point_at(points, offset[2]);
@@ -234,6 +245,9 @@ static inline __attribute__((always_inline)) void project_full8(plait_distance_b
 		break;
 	case PLAIT_LAYOUT_SHEAR:
 		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_SHEAR);
+		break;
+	case PLAIT_LAYOUT_SKIP:
+		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_SKIP);
 		break;
 	case PLAIT_LAYOUT_GATHER:
 		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_GATHER);

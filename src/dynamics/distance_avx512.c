@@ -140,6 +140,13 @@ static inline void load_blocks(plait_point *points, const uint32_t *offset, plai
 			i[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(2, 0, 2, 0));
 			j[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(3, 1, 3, 1));
 		}
+	} else if (layout == PLAIT_LAYOUT_SKIP) {
+		for (int m = 0; m < 4; ++m) {
+			/* Points 8 m .. 8 m + 3: constraints 4 m and 4 m + 1 joining the first two to the last two. */
+			__m512 low = _mm512_loadu_ps(a + 32 * m), high = _mm512_loadu_ps(a + 32 * m + 16);
+			i[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(1, 0, 1, 0));
+			j[m] = _mm512_shuffle_f32x4(low, high, _MM_SHUFFLE(3, 2, 3, 2));
+		}
 	} else {
 		const float *b = point_at(points, offset[2]);
 		for (int m = 0; m < 4; ++m) {
@@ -168,6 +175,11 @@ static inline void store_blocks(plait_point *points, const uint32_t *offset, pla
 		for (int m = 0; m < 4; ++m) {
 			_mm512_storeu_ps(a + 32 * m, _mm512_permutex2var_ps(i[m], first, j[m]));
 			_mm512_storeu_ps(a + 32 * m + 16, _mm512_permutex2var_ps(i[m], second, j[m]));
+		}
+	} else if (layout == PLAIT_LAYOUT_SKIP) {
+		for (int m = 0; m < 4; ++m) {
+			_mm512_storeu_ps(a + 32 * m, _mm512_shuffle_f32x4(i[m], j[m], _MM_SHUFFLE(1, 0, 1, 0)));
+			_mm512_storeu_ps(a + 32 * m + 16, _mm512_shuffle_f32x4(i[m], j[m], _MM_SHUFFLE(3, 2, 3, 2)));
 		}
 	} else {
 		float *b = point_at(points, offset[2]);
@@ -281,6 +293,9 @@ static inline __attribute__((always_inline)) void project_full16(plait_distance_
 		break;
 	case PLAIT_LAYOUT_SHEAR:
 		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_SHEAR);
+		break;
+	case PLAIT_LAYOUT_SKIP:
+		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_SKIP);
 		break;
 	case PLAIT_LAYOUT_GATHER:
 		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_GATHER);
