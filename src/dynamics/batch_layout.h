@@ -1,7 +1,7 @@
 /* Where the points of a SIMD batch of distance constraints lie: the vector kernels
  * (distance_avx2.c, distance_avx512.c) move a batch whose points lie in runs of consecutive
  * points with full-width loads and stores, and gather the others point by point. In a grid
- * cloth most batches can lie in runs, in one of three layouts (a = the first constraint's
+ * cloth most batches can lie in runs, in one of four layouts (a = the first constraint's
  * first point, b = its second, b1 = the second constraint's first, k = the constraint's lane):
  *   RUNS:  constraint k joins a + k and b + k (edges across rows, bend and shear along them);
  *   PAIRS: constraint k joins a + 2k and a + 2k + 1 (every other edge along a row);

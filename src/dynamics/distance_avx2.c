@@ -250,6 +250,7 @@ static inline __attribute__((always_inline)) void project_full8(plait_distance_b
 		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_SKIP);
 		break;
 	case PLAIT_LAYOUT_GATHER:
+	default: /* (no other value is kept) */
 		project8(block, points, c, 8, ih2, rigid, PLAIT_LAYOUT_GATHER);
 		break;
 	}

@@ -298,6 +298,7 @@ static inline __attribute__((always_inline)) void project_full16(plait_distance_
 		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_SKIP);
 		break;
 	case PLAIT_LAYOUT_GATHER:
+	default: /* (no other value is kept) */
 		project16(block, points, c, 16, 0, false, ih2, rigid, PLAIT_LAYOUT_GATHER);
 		break;
 	}
