@@ -97,7 +97,7 @@ int main(int argc, char **argv)
 		double start = now_seconds();
 		for (int s = 0; s < sweeps; ++s) {
 			for (int b = 0; b < 3; ++b) {
-				plait_solve_distance(blocks[b], p, 3600.0f, PLAIT_SWEEP_FORWARD, sim->distance_kernel,
+				plait_solve_distance(blocks[b], p, NULL, 3600.0f, PLAIT_SWEEP_FORWARD, sim->distance_kernel,
 				                     &sim->parallel);
 				projections += blocks[b]->count;
 			}

@@ -103,7 +103,7 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 		int run_start[3] = {0, split, count}, region_start[2] = {0, 2};
 		unsigned char *layouts = calloc((size_t)count, 1);
 		if (keep_layouts) {
-			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL};
+			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL};
 			plait_find_batch_layouts(&block, layouts);
 			block.colouring.batch_layout = layouts;
 		}
@@ -280,7 +280,7 @@ Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
 	}
 	/* Kept per position: batches start a multiple of 16 (8) after their run's start. */
 	int run_start[3] = {0, FILLERS, count}, region_start[2] = {0, 2};
-	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL};
+	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL};
 	unsigned char *kept = malloc((size_t)count);
 	memset(kept, 0xff, (size_t)count);
 	plait_find_batch_layouts(&block, kept);

@@ -42,3 +42,68 @@ void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *
 		}
 	}
 }
+
+/* The number of constraints from offset (at most `most`) that lie in `layout` (RUNS, PAIRS,
+ * SHEAR or SKIP), lane by lane as plait_batch_layout_of tests them; SHEAR and SKIP need two. */
+static int lanes_in_layout(const uint32_t *offset, int most, plait_batch_layout layout)
+{
+	uint32_t a = offset[0], b = offset[1], b1 = most > 1 ? offset[2] : 0;
+	int k = 0;
+	for (; k < most; ++k) {
+		uint32_t on = STEP * (uint32_t)k, even = STEP * (uint32_t)(k & ~1);
+		bool fits = false;
+		switch (layout) {
+		case PLAIT_LAYOUT_RUNS:
+			fits = offset[2 * k] == a + on && offset[2 * k + 1] == b + on;
+			break;
+		case PLAIT_LAYOUT_PAIRS:
+			fits = offset[2 * k] == a + 2 * on && offset[2 * k + 1] == a + 2 * on + STEP;
+			break;
+		case PLAIT_LAYOUT_SHEAR: {
+			uint32_t first = k % 2 == 0 ? a + even : b1 + even, second = k % 2 == 0 ? b1 + even : a + even;
+			fits = most > 1 && offset[2 * k] == first && offset[2 * k + 1] == second + STEP;
+			break;
+		}
+		case PLAIT_LAYOUT_SKIP: {
+			uint32_t skipped = a + 2 * even + STEP * (uint32_t)(k % 2);
+			fits = offset[2 * k] == skipped && offset[2 * k + 1] == skipped + 2 * STEP;
+			break;
+		}
+		default:
+			break;
+		}
+		if (!fits) {
+			break;
+		}
+	}
+	return k;
+}
+
+int plait_find_segments(const plait_distance_block *block, unsigned char *segment)
+{
+	static const plait_batch_layout layouts[] = {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_PAIRS, PLAIT_LAYOUT_SHEAR,
+	                                             PLAIT_LAYOUT_SKIP};
+	const plait_colouring *colouring = &block->colouring;
+	int covered = 0;
+	for (int run = 0; run < colouring->run_count; ++run) {
+		int begin = colouring->run_start[run], end = colouring->run_start[run + 1];
+		for (int c = begin; c < end;) {
+			int most = end - c < 16 ? end - c : 16, length = 1;
+			plait_batch_layout best = PLAIT_LAYOUT_GATHER;
+			for (int k = 0; k < 4 && most > 1; ++k) {
+				int lanes = lanes_in_layout(block->point_offset[c], most, layouts[k]);
+				if (lanes > length) {
+					length = lanes;
+					best = layouts[k];
+				}
+			}
+			segment[c] = (unsigned char)((unsigned)best << 5 | (unsigned)length);
+			for (int k = 1; k < length; ++k) {
+				segment[c + k] = 0;
+			}
+			covered += length > 1 ? length : 0;
+			c += length;
+		}
+	}
+	return covered;
+}

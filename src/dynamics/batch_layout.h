@@ -50,4 +50,24 @@ plait_batch_layout plait_batch_layout_of(const uint32_t *offset, int lanes);
  * bytes. */
 void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *layout);
 
+/* Segments: the same layouts, for the column kernel (distance_columns_avx512.c), which needs
+ * no batch to start at a multiple of 16 and masks a short one at no cost. Each coloured run
+ * is cut, from its start, into the longest prefixes of at most 16 constraints that lie in one
+ * layout; a constraint that begins none (two or more) is a segment of one, projected alone.
+ * segment[c] is nonzero where a segment starts: bits 0-4 its length (1 to 16), bits 5-7 its
+ * layout; zero inside one. */
+static inline int plait_segment_length(unsigned char kept)
+{
+	return kept & 31;
+}
+
+static inline plait_batch_layout plait_segment_layout(unsigned char kept)
+{
+	return (plait_batch_layout)(kept >> 5);
+}
+
+/* Fills segment[] (plait_colouring_end(&block->colouring) bytes) and returns how many of the
+ * block's coloured constraints lie in segments of two or more. */
+int plait_find_segments(const plait_distance_block *block, unsigned char *segment);
+
 #endif

@@ -12,6 +12,7 @@ void plait_colouring_clear(plait_colouring *colouring, const plait_allocator *al
 	plait_free(allocator, colouring->region_start);
 	plait_free(allocator, colouring->run_start);
 	plait_free(allocator, colouring->batch_layout);
+	plait_free(allocator, colouring->segment);
 	memset(colouring, 0, sizeof *colouring);
 }
 
@@ -171,6 +172,46 @@ static void permute(char *scratch, void *data, size_t size, int count, const int
 
 enum { DISTANCE_BLOCKS = 3, BLOCKS = DISTANCE_BLOCKS + 1 };
 
+static int count_segments(const unsigned char *segment, int count)
+{
+	int segments = 0;
+	for (int c = 0; c < count; ++c) {
+		segments += segment[c] != 0;
+	}
+	return segments;
+}
+
+/* Whether the distance blocks are projected on the points as columns (solver.c, "Columns"),
+ * and room for the columns. A segment costs the column kernel about what a whole batch of 16
+ * costs the point kernel, and a segment of one (a constraint in no layout) about twice a
+ * gathered batch's share, so columns pay when segments hold 8 constraints or more on average:
+ * a grid cloth's hold about 15, a scanned mesh's nearer one. They need AVX-512 (the gathers
+ * of AVX2 cost more than the transposes they would save). Without the memory they are not
+ * used: that only costs speed. */
+static void choose_columns(plait_sim *sim, int segment_count)
+{
+	int constraints = sim->stretch.count + sim->shear.count + sim->bend_distance.count;
+	sim->use_columns = PLAIT_X86_KERNELS && sim->simd == PLAIT_SIMD_AVX512 && constraints > 0 &&
+	                   (int64_t)segment_count * 8 <= (int64_t)constraints;
+	int needed = sim->particles.capacity;
+	if (!sim->use_columns || sim->columns_capacity >= needed) {
+		return;
+	}
+	/* Four columns, each padded to whole cache lines. */
+	int padded = (needed + 15) & ~15;
+	float *columns = plait_alloc(&sim->allocator, sizeof(float) * 4 * (size_t)padded);
+	if (columns == NULL) {
+		sim->use_columns = false;
+		return;
+	}
+	plait_free(&sim->allocator, sim->column_x);
+	sim->column_x = columns;
+	sim->column_y = columns + padded;
+	sim->column_z = columns + 2 * (size_t)padded;
+	sim->column_w = columns + 3 * (size_t)padded;
+	sim->columns_capacity = padded;
+}
+
 /* Every block's order is computed first and applied only when all succeeded, so a failure
  * leaves every block as it was. */
 bool plait_sim_colour(plait_sim *sim)
@@ -196,6 +237,7 @@ bool plait_sim_colour(plait_sim *sim)
 	char *scratch = plait_alloc(a, sizeof bend->quad[0] * (size_t)largest);
 	int *orders[BLOCKS] = {NULL, NULL, NULL, NULL};
 	unsigned char *layouts[DISTANCE_BLOCKS] = {NULL, NULL, NULL};
+	unsigned char *segments[DISTANCE_BLOCKS] = {NULL, NULL, NULL};
 	plait_colouring colourings[BLOCKS];
 	memset(colourings, 0, sizeof colourings);
 	bool ok = scratch != NULL;
@@ -206,9 +248,11 @@ bool plait_sim_colour(plait_sim *sim)
 	}
 	for (int k = 0; k < DISTANCE_BLOCKS && ok; ++k) {
 		layouts[k] = plait_alloc(a, (size_t)(counts[k] > 0 ? counts[k] : 1));
-		ok = layouts[k] != NULL;
+		segments[k] = plait_alloc(a, (size_t)(counts[k] > 0 ? counts[k] : 1));
+		ok = layouts[k] != NULL && segments[k] != NULL;
 	}
 	if (ok) {
+		int segment_count = 0;
 		for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
 			plait_distance_block *b = distance[k];
 			permute(scratch, b->pair, sizeof *b->pair, b->count, orders[k]);
@@ -222,7 +266,12 @@ bool plait_sim_colour(plait_sim *sim)
 			b->colouring.batch_layout = layouts[k];
 			layouts[k] = NULL;
 			plait_find_batch_layouts(b, b->colouring.batch_layout);
+			b->colouring.segment = segments[k];
+			segments[k] = NULL;
+			(void)plait_find_segments(b, b->colouring.segment);
+			segment_count += count_segments(b->colouring.segment, plait_colouring_end(&b->colouring));
 		}
+		choose_columns(sim, segment_count);
 		const int *order = orders[DISTANCE_BLOCKS];
 		permute(scratch, bend->quad, sizeof *bend->quad, bend->count, order);
 		permute(scratch, bend->rest_angle, sizeof(float), bend->count, order);
@@ -238,6 +287,7 @@ bool plait_sim_colour(plait_sim *sim)
 	}
 	for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
 		plait_free(a, layouts[k]);
+		plait_free(a, segments[k]);
 	}
 	for (int k = 0; k < BLOCKS; ++k) {
 		plait_free(a, orders[k]);

@@ -15,6 +15,7 @@ typedef struct distance_job {
 	plait_distance_kernel *kernel;
 	plait_distance_block *block;
 	plait_point *points;
+	const plait_columns *columns; /* non-NULL: the points are there (solver.c, "Columns") */
 	float inverse_h_squared;
 	plait_sweep sweep;
 } distance_job;
@@ -23,6 +24,12 @@ typedef struct distance_job {
 static void distance_range(void *context, int begin, int end)
 {
 	distance_job *job = context;
+#if PLAIT_X86_KERNELS
+	if (job->columns != NULL) {
+		plait_project_distance_columns_avx512(job->block, job->columns, begin, end, job->inverse_h_squared);
+		return;
+	}
+#endif
 	job->kernel(job->block, job->points, begin, end, job->inverse_h_squared);
 }
 
@@ -63,7 +70,11 @@ static void sweep_boundary(plait_parallel *parallel, distance_job *job, bool bac
 	}
 	for (int m = 0; m < loose; ++m) {
 		int c = backward ? block->count - 1 - m : coloured + m;
-		plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
+		if (job->columns != NULL) {
+			distance_range(job, c, c + 1);
+		} else {
+			plait_project_distance_scalar(block, job->points, c, c + 1, job->inverse_h_squared);
+		}
 	}
 	for (int m = 0; backward && m < runs; ++m) {
 		int k = colouring->run_count - 1 - m;
@@ -79,10 +90,11 @@ static void sweep_boundary(plait_parallel *parallel, distance_job *job, bool bac
  * that was 12% of the frame): the boundary forward, every region there and back, the boundary
  * backward. The order stays a palindrome, so the sweep stays symmetric (architecture.md,
  * "Symmetric sweeps"). */
-void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
-                          plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel)
+void plait_solve_distance(plait_distance_block *block, plait_particles *particles,
+                          const plait_columns *columns, float inverse_h_squared, plait_sweep sweep,
+                          plait_distance_kernel *kernel, plait_parallel *parallel)
 {
-	distance_job job = {kernel, block, particles->point, inverse_h_squared, sweep};
+	distance_job job = {kernel, block, particles->point, columns, inverse_h_squared, sweep};
 	const plait_colouring *colouring = &block->colouring;
 	if (sweep != PLAIT_SWEEP_FORWARD) {
 		/* Backward, or the symmetric sweep's first half. */

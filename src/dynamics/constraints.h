@@ -51,8 +51,11 @@ static inline plait_sweep plait_sweep_for(int iteration, int count, int substep,
 /* A sweep goes colour by colour (each colour split over the workers), then through the
  * uncoloured rest one by one; a backward sweep goes the other way. A symmetric sweep does both,
  * region by region: the boundary forward, each region there and back, the boundary back. */
-void plait_solve_distance(plait_distance_block *block, plait_particles *particles, float inverse_h_squared,
-                          plait_sweep sweep, plait_distance_kernel *kernel, plait_parallel *parallel);
+/* columns: NULL, or the points as columns (solver.c, "Columns"), projected there with the column
+ * kernel instead of `kernel`. */
+void plait_solve_distance(plait_distance_block *block, plait_particles *particles,
+                          const plait_columns *columns, float inverse_h_squared, plait_sweep sweep,
+                          plait_distance_kernel *kernel, plait_parallel *parallel);
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
                       plait_bend_kernel *kernel, plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. With

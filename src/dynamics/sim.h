@@ -131,6 +131,8 @@ typedef struct plait_colouring {
 	/* Distance blocks: the layout of the SIMD batches from each coloured position
 	 * (dynamics/batch_layout.h), or NULL: every batch gathered. */
 	unsigned char *batch_layout;
+	/* Distance blocks: the segments of the column kernel (dynamics/batch_layout.h), or NULL. */
+	unsigned char *segment;
 } plait_colouring;
 
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
@@ -326,6 +328,12 @@ typedef struct plait_sim {
 	void (*bend_kernel)(struct plait_bend_block *block, plait_point *points, int begin, int end,
 	                    float inverse_h_squared);
 	plait_parallel parallel;
+	/* The points as columns while the distance blocks are projected, when every block lies in
+	 * segments (solver.c, "Columns"): x, y, z and w arrays of columns_capacity floats each,
+	 * one allocation. in_columns: they hold the current points and the point array is stale. */
+	float *column_x, *column_y, *column_z, *column_w;
+	int columns_capacity;
+	bool use_columns, in_columns;
 
 	float largest_radius; /* of any particle, scene units; measured at the start of each step */
 

@@ -101,6 +101,7 @@ void plait_sim_destroy(plait_sim *sim)
 	plait_free(&sim->allocator, sim->pair_list);
 	plait_free(&sim->allocator, sim->pair_lower);
 	plait_free(&sim->allocator, sim->pair_upper);
+	plait_free(&sim->allocator, sim->column_x);
 	plait_schedule_destroy(&sim->schedule, &sim->allocator);
 	/* The particle hash is owned by the contact stage and freed there. */
 }

@@ -1,0 +1,338 @@
+/* The distance kernel on points as columns (x, y, z and w in arrays of their own), AVX-512F.
+ *
+ * The point kernel (distance_avx512.c) spends most of its time turning points into a register
+ * per coordinate and back: four loads and a 4 x 4 transpose a side of each batch, and the same
+ * on the way out, where a 512-bit shuffle takes two of Zen 4's shuffle slots. On columns a
+ * batch whose points lie in runs (batch_layout.h) loads each coordinate whole, and the other
+ * layouts need one in-lane swap a coordinate: about 0.4-0.7 ns a projection instead of 1.3
+ * (RUNS) to 2.1 (PAIRS). Columns have no cheap gather, though (Zen 4's vgatherdps is slower
+ * than the point kernel's transposes), so the solver only uses them when nearly every
+ * constraint lies in a segment (colouring.c, choose_columns) and keeps the point array the
+ * rest of the time (solver.c, "Columns").
+ *
+ * The lanes of a PAIRS or SKIP segment hold points, not constraints: both ends of each
+ * constraint, each with the other's coordinates beside it (a swap inside each 128-bit block),
+ * so both compute the constraint, one with d negated. Since -(a - b) = b - a, (-d)^2 = d^2,
+ * w_i + w_j = w_j + w_i and x - w s (-d) = x + w s d exactly, each end moves by the bits the
+ * portable kernel gives it; so does a SHEAR segment's second constraint of each pair, whose
+ * ends swap sides. Every value is the portable kernel's (distance_scalar.c), operation for
+ * operation. Compiled with -mavx512f (never with FMA contraction); only called when the
+ * processor has AVX-512F. */
+#include "dynamics/distance_kernel.h"
+
+#if PLAIT_X86_KERNELS
+#include <immintrin.h>
+#include <math.h>
+
+#include "dynamics/batch_layout.h"
+#include "dynamics/colouring.h"
+#include "dynamics/points_avx512.h"
+
+/* Swaps inside each 128-bit block: neighbours (PAIRS, SHEAR) and halves (SKIP). */
+#define SWAP_NEIGHBOURS _MM_SHUFFLE(2, 3, 0, 1)
+#define SWAP_HALVES _MM_SHUFFLE(1, 0, 3, 2)
+
+/* The constraint of each lane, in a vector of a PAIRS or SKIP segment (add 8 for the second). */
+#define PAIRS_LANES _mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7)
+#define SKIP_LANES _mm512_setr_epi32(0, 1, 0, 1, 2, 3, 2, 3, 4, 5, 4, 5, 6, 7, 6, 7)
+/* Back: the lane (of two vectors, the second from 16) holding each constraint's first end. */
+#define PAIRS_FIRSTS _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30)
+#define SKIP_FIRSTS _mm512_setr_epi32(0, 1, 4, 5, 8, 9, 12, 13, 16, 17, 20, 21, 24, 25, 28, 29)
+
+static inline uint32_t index_of(uint32_t offset)
+{
+	return offset / (uint32_t)sizeof(plait_point);
+}
+
+/* A constraint's values (rest length, compliances, multiplier) for the lanes of a vector. */
+typedef struct lane_values {
+	__m512 rest, tension, compression, lambda;
+} lane_values;
+
+static inline lane_values load_lane_values(const plait_distance_block *block, int c, __mmask16 constraints,
+                                           bool rigid, bool spread, __m512i lanes)
+{
+	lane_values v;
+	v.rest = _mm512_maskz_loadu_ps(constraints, block->rest + c);
+	if (spread) {
+		v.rest = _mm512_permutexvar_ps(lanes, v.rest);
+	}
+	if (!rigid) {
+		v.tension = _mm512_maskz_loadu_ps(constraints, block->compliance_tension + c);
+		v.compression = _mm512_maskz_loadu_ps(constraints, block->compliance_compression + c);
+		v.lambda = _mm512_maskz_loadu_ps(constraints, block->lambda + c);
+		if (spread) {
+			v.tension = _mm512_permutexvar_ps(lanes, v.tension);
+			v.compression = _mm512_permutexvar_ps(lanes, v.compression);
+			v.lambda = _mm512_permutexvar_ps(lanes, v.lambda);
+		}
+	}
+	return v;
+}
+
+/* The step s of each lane in `update` (zero elsewhere), and the multiplier after it (compliant
+ * blocks); distance_avx512.c's project16, operation for operation. */
+static inline __attribute__((always_inline)) __m512 step_of(__m512 dx, __m512 dy, __m512 dz, __m512 w_sum,
+                                                            __mmask16 update, const lane_values *v,
+                                                            __m512 ih2, bool rigid, __m512 *lambda)
+{
+	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
+	__m512 length_sq =
+	    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+	if (rigid) {
+		__m512 rest_sq = _mm512_mul_ps(v->rest, v->rest);
+		__m512 sum_sq = _mm512_max_ps(_mm512_add_ps(length_sq, rest_sq), _mm512_set1_ps(1e-24f));
+		__mmask16 moving = _mm512_mask_cmp_ps_mask(update, w_sum, zero, _CMP_GT_OQ);
+		__m512 denominator = _mm512_mask_blend_ps(moving, one, _mm512_mul_ps(w_sum, sum_sq));
+		return _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(rest_sq, length_sq), denominator));
+	}
+	__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), _mm512_set1_ps(1e-12f));
+	__m512 C = _mm512_sub_ps(length, v->rest);
+	__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
+	__m512 alpha = _mm512_mask_blend_ps(stretched, v->compression, v->tension);
+	__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
+	__mmask16 active = _mm512_mask_cmp_ps_mask(moving & update, alpha, zero, _CMP_GE_OQ);
+	__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
+	__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
+	denominator = _mm512_mask_blend_ps(moving, one, denominator);
+	__m512 s = _mm512_div_ps(
+	    _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(-0.0f), C), _mm512_mul_ps(alpha_tilde, v->lambda)),
+	    denominator);
+	s = _mm512_maskz_mov_ps(active, s);
+	*lambda = _mm512_add_ps(v->lambda, _mm512_mul_ps(s, length));
+	return s;
+}
+
+/* RUNS (constraint k joins a + k and b + k) and SHEAR (constraint 2m joins a + 2m and
+ * b1 + 2m + 1, constraint 2m + 1 joins b1 + 2m and a + 2m + 1: lane k holds a + k and, after a
+ * swap, b1 + (k ^ 1)): constraint k in lane k. */
+static inline __attribute__((always_inline)) void project_two_rows(plait_distance_block *block,
+                                                                   const plait_columns *columns, int c, int n,
+                                                                   __m512 ih2, bool rigid, bool shear)
+{
+	__mmask16 constraints = (__mmask16)((1u << n) - 1u);
+	uint32_t a = index_of(block->point_offset[c][0]);
+	uint32_t b = shear ? index_of(block->point_offset[c + 1][0]) : index_of(block->point_offset[c][1]);
+	/* A shear segment's second row holds constraint k's point in lane k ^ 1. */
+	__mmask16 second =
+	    shear ? (__mmask16)(((constraints & 0x5555u) << 1) | ((constraints & 0xAAAAu) >> 1)) : constraints;
+	__m512 xi = _mm512_maskz_loadu_ps(constraints, columns->x + a);
+	__m512 yi = _mm512_maskz_loadu_ps(constraints, columns->y + a);
+	__m512 zi = _mm512_maskz_loadu_ps(constraints, columns->z + a);
+	__m512 wi = _mm512_maskz_loadu_ps(constraints, columns->w + a);
+	__m512 xj = _mm512_maskz_loadu_ps(second, columns->x + b);
+	__m512 yj = _mm512_maskz_loadu_ps(second, columns->y + b);
+	__m512 zj = _mm512_maskz_loadu_ps(second, columns->z + b);
+	__m512 wj = _mm512_maskz_loadu_ps(second, columns->w + b);
+	if (shear) {
+		xj = _mm512_permute_ps(xj, SWAP_NEIGHBOURS);
+		yj = _mm512_permute_ps(yj, SWAP_NEIGHBOURS);
+		zj = _mm512_permute_ps(zj, SWAP_NEIGHBOURS);
+		wj = _mm512_permute_ps(wj, SWAP_NEIGHBOURS);
+	}
+	lane_values v = load_lane_values(block, c, constraints, rigid, false, _mm512_setzero_si512());
+	__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
+	__m512 lambda;
+	__m512 s = step_of(dx, dy, dz, _mm512_add_ps(wi, wj), constraints, &v, ih2, rigid, &lambda);
+	if (!rigid) {
+		_mm512_mask_storeu_ps(block->lambda + c, constraints, lambda);
+	}
+	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
+	_mm512_mask_storeu_ps(columns->x + a, constraints, _mm512_sub_ps(xi, _mm512_mul_ps(si, dx)));
+	_mm512_mask_storeu_ps(columns->y + a, constraints, _mm512_sub_ps(yi, _mm512_mul_ps(si, dy)));
+	_mm512_mask_storeu_ps(columns->z + a, constraints, _mm512_sub_ps(zi, _mm512_mul_ps(si, dz)));
+	xj = _mm512_add_ps(xj, _mm512_mul_ps(sj, dx));
+	yj = _mm512_add_ps(yj, _mm512_mul_ps(sj, dy));
+	zj = _mm512_add_ps(zj, _mm512_mul_ps(sj, dz));
+	if (shear) {
+		xj = _mm512_permute_ps(xj, SWAP_NEIGHBOURS);
+		yj = _mm512_permute_ps(yj, SWAP_NEIGHBOURS);
+		zj = _mm512_permute_ps(zj, SWAP_NEIGHBOURS);
+	}
+	_mm512_mask_storeu_ps(columns->x + b, second, xj);
+	_mm512_mask_storeu_ps(columns->y + b, second, yj);
+	_mm512_mask_storeu_ps(columns->z + b, second, zj);
+}
+
+/* PAIRS (constraint k joins a + 2k and a + 2k + 1) and SKIP (constraint 2m joins a + 4m and
+ * a + 4m + 2, constraint 2m + 1 joins a + 4m + 1 and a + 4m + 3): 16 consecutive points, 8
+ * constraints, a vector; each lane computes its constraint with its partner's coordinates. */
+static inline __attribute__((always_inline)) void project_one_row(plait_distance_block *block,
+                                                                  const plait_columns *columns, int c, int n,
+                                                                  __m512 ih2, bool rigid, bool skip)
+{
+	__mmask16 constraints = (__mmask16)((1u << n) - 1u);
+	uint32_t a = index_of(block->point_offset[c][0]);
+	__m512 lambdas[2] = {_mm512_setzero_ps(), _mm512_setzero_ps()};
+	for (int g = 0; 8 * g < n; ++g) {
+		int here = n - 8 * g < 8 ? n - 8 * g : 8;
+		/* The lanes of this vector's `here` constraints. */
+		unsigned lanes;
+		if (skip) {
+			unsigned quads = (unsigned)here / 2;
+			lanes = ((1u << (4 * quads)) - 1u) | (here % 2 != 0 ? 5u << (4 * quads) : 0u);
+		} else {
+			lanes = (1u << (2 * here)) - 1u;
+		}
+		__mmask16 update = (__mmask16)lanes;
+		const float *x = columns->x + a + 16 * g, *y = columns->y + a + 16 * g, *z = columns->z + a + 16 * g;
+		__m512 px = _mm512_maskz_loadu_ps(update, x), py = _mm512_maskz_loadu_ps(update, y);
+		__m512 pz = _mm512_maskz_loadu_ps(update, z);
+		__m512 w = _mm512_maskz_loadu_ps(update, columns->w + a + 16 * g);
+		__m512 qx, qy, qz, qw;
+		if (skip) {
+			qx = _mm512_permute_ps(px, SWAP_HALVES);
+			qy = _mm512_permute_ps(py, SWAP_HALVES);
+			qz = _mm512_permute_ps(pz, SWAP_HALVES);
+			qw = _mm512_permute_ps(w, SWAP_HALVES);
+		} else {
+			qx = _mm512_permute_ps(px, SWAP_NEIGHBOURS);
+			qy = _mm512_permute_ps(py, SWAP_NEIGHBOURS);
+			qz = _mm512_permute_ps(pz, SWAP_NEIGHBOURS);
+			qw = _mm512_permute_ps(w, SWAP_NEIGHBOURS);
+		}
+		__m512i spread = _mm512_add_epi32(skip ? SKIP_LANES : PAIRS_LANES, _mm512_set1_epi32(8 * g));
+		lane_values v = load_lane_values(block, c, constraints, rigid, true, spread);
+		__m512 dx = _mm512_sub_ps(qx, px), dy = _mm512_sub_ps(qy, py), dz = _mm512_sub_ps(qz, pz);
+		__m512 s = step_of(dx, dy, dz, _mm512_add_ps(w, qw), update, &v, ih2, rigid, &lambdas[g]);
+		__m512 sw = _mm512_mul_ps(w, s);
+		_mm512_mask_storeu_ps((float *)x, update, _mm512_sub_ps(px, _mm512_mul_ps(sw, dx)));
+		_mm512_mask_storeu_ps((float *)y, update, _mm512_sub_ps(py, _mm512_mul_ps(sw, dy)));
+		_mm512_mask_storeu_ps((float *)z, update, _mm512_sub_ps(pz, _mm512_mul_ps(sw, dz)));
+	}
+	if (!rigid) {
+		__m512 firsts = _mm512_permutex2var_ps(lambdas[0], skip ? SKIP_FIRSTS : PAIRS_FIRSTS, lambdas[1]);
+		_mm512_mask_storeu_ps(block->lambda + c, constraints, firsts);
+	}
+}
+
+/* One constraint, as distance_scalar.c. */
+static inline __attribute__((always_inline)) void project_alone(plait_distance_block *block,
+                                                                const plait_columns *columns, int c,
+                                                                float inverse_h_squared, bool rigid)
+{
+	int i = block->pair[c][0], j = block->pair[c][1];
+	float *x = columns->x, *y = columns->y, *z = columns->z;
+	float wi = columns->w[i], wj = columns->w[j];
+	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
+	float length_sq = dx * dx + dy * dy + dz * dz;
+	float w_sum = wi + wj;
+	float s;
+	if (rigid) {
+		float rest_sq = block->rest[c] * block->rest[c];
+		float sum_sq = length_sq + rest_sq;
+		sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
+		float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
+		s = w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
+	} else {
+		float length = sqrtf(length_sq);
+		length = length > 1e-12f ? length : 1e-12f;
+		float C = length - block->rest[c];
+		float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
+		bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
+		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
+		float denominator = (w_sum + alpha_tilde) * length;
+		denominator = w_sum > 0.0f ? denominator : 1.0f;
+		s = (-C - alpha_tilde * block->lambda[c]) / denominator;
+		s = active ? s : 0.0f;
+		block->lambda[c] = block->lambda[c] + s * length;
+	}
+	float si = wi * s, sj = wj * s;
+	x[i] = x[i] - si * dx;
+	y[i] = y[i] - si * dy;
+	z[i] = z[i] - si * dz;
+	x[j] = x[j] + sj * dx;
+	y[j] = y[j] + sj * dy;
+	z[j] = z[j] + sj * dz;
+}
+
+static inline __attribute__((always_inline)) void project_columns(plait_distance_block *block,
+                                                                  const plait_columns *columns, int begin,
+                                                                  int end, float inverse_h_squared,
+                                                                  bool rigid)
+{
+	const __m512 ih2 = _mm512_set1_ps(inverse_h_squared);
+	const unsigned char *segment = block->colouring.segment;
+	int coloured = plait_colouring_end(&block->colouring);
+	for (int c = begin; c < end;) {
+		/* Inside a segment (a range cut through it) or past the coloured constraints: one at a
+		 * time up to the next segment. */
+		unsigned char kept = segment != NULL && c < coloured ? segment[c] : 0;
+		int length = plait_segment_length(kept);
+		if (length < 2) {
+			project_alone(block, columns, c, inverse_h_squared, rigid);
+			++c;
+			continue;
+		}
+		int n = end - c < length ? end - c : length;
+		switch (plait_segment_layout(kept)) {
+		case PLAIT_LAYOUT_RUNS:
+			project_two_rows(block, columns, c, n, ih2, rigid, false);
+			break;
+		case PLAIT_LAYOUT_SHEAR:
+			project_two_rows(block, columns, c, n, ih2, rigid, true);
+			break;
+		case PLAIT_LAYOUT_PAIRS:
+			project_one_row(block, columns, c, n, ih2, rigid, false);
+			break;
+		case PLAIT_LAYOUT_SKIP:
+			project_one_row(block, columns, c, n, ih2, rigid, true);
+			break;
+		default: /* (no other layout is kept with a length) */
+			for (int k = 0; k < n; ++k) {
+				project_alone(block, columns, c + k, inverse_h_squared, rigid);
+			}
+			break;
+		}
+		c += n;
+	}
+}
+
+void plait_project_distance_columns_avx512(plait_distance_block *block, const plait_columns *columns,
+                                           int begin, int end, float inverse_h_squared)
+{
+	if (block->compliant_count == 0) {
+		project_columns(block, columns, begin, end, inverse_h_squared, true);
+	} else {
+		project_columns(block, columns, begin, end, inverse_h_squared, false);
+	}
+	_mm256_zeroupper();
+}
+
+void plait_points_to_columns_avx512(const plait_point *points, const plait_columns *columns, int begin,
+                                    int end)
+{
+	int i = begin;
+	for (; i + 16 <= end; i += 16) {
+		__m512 x, y, z, w;
+		load_points16(points, i, &x, &y, &z, &w);
+		_mm512_storeu_ps(columns->x + i, x);
+		_mm512_storeu_ps(columns->y + i, y);
+		_mm512_storeu_ps(columns->z + i, z);
+		_mm512_storeu_ps(columns->w + i, w);
+	}
+	for (; i < end; ++i) {
+		columns->x[i] = points[i].x.x;
+		columns->y[i] = points[i].x.y;
+		columns->z[i] = points[i].x.z;
+		columns->w[i] = points[i].w;
+	}
+	_mm256_zeroupper();
+}
+
+void plait_points_from_columns_avx512(plait_point *points, const plait_columns *columns, int begin, int end)
+{
+	int i = begin;
+	for (; i + 16 <= end; i += 16) {
+		store_points16(points, i, _mm512_loadu_ps(columns->x + i), _mm512_loadu_ps(columns->y + i),
+		               _mm512_loadu_ps(columns->z + i), _mm512_loadu_ps(columns->w + i));
+	}
+	for (; i < end; ++i) {
+		points[i].x.x = columns->x[i];
+		points[i].x.y = columns->y[i];
+		points[i].x.z = columns->z[i];
+		points[i].w = columns->w[i];
+	}
+	_mm256_zeroupper();
+}
+#endif
