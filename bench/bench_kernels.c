@@ -73,11 +73,13 @@ int main(int argc, char **argv)
 			n = atoi(argv[k]);
 		}
 	}
-	plait_simd levels[] = {PLAIT_SIMD_SCALAR, PLAIT_SIMD_AVX2, PLAIT_SIMD_AVX512};
-	const char *names[] = {"scalar", "avx2", "avx512"};
+	/* "columns": the AVX-512 column kernel on the points as columns (copied there before the
+	 * sweeps and back after them, outside the timing), where the cloth's segments allow it. */
+	plait_simd levels[] = {PLAIT_SIMD_SCALAR, PLAIT_SIMD_AVX2, PLAIT_SIMD_AVX512, PLAIT_SIMD_AVX512};
+	const char *names[] = {"scalar", "avx2", "avx512", "columns"};
 	plait_point *reference = NULL;
 	int particle_count = 0;
-	for (int l = 0; l < 3; ++l) {
+	for (int l = 0; l < 4; ++l) {
 		if (only != NULL && strcmp(only, names[l]) != 0) {
 			continue;
 		}
@@ -93,16 +95,33 @@ int main(int argc, char **argv)
 			p->point[i].x.y += 0.01f * (float)((i * 7919) % 13) / 13.0f;
 		}
 		plait_distance_block *blocks[] = {&sim->stretch, &sim->shear, &sim->bend_distance};
+		plait_columns columns = {sim->column_x, sim->column_y, sim->column_z, sim->column_w};
+		bool on_columns = l == 3;
+		if (on_columns && !sim->use_columns) {
+			printf("simd=columns n=%d used=no\n", n);
+			plait_destroy_world(world);
+			continue;
+		}
+#if PLAIT_X86_KERNELS
+		if (on_columns) {
+			plait_points_to_columns_avx512(p->point, &columns, 0, p->count);
+		}
+#endif
 		long projections = 0;
 		double start = now_seconds();
 		for (int s = 0; s < sweeps; ++s) {
 			for (int b = 0; b < 3; ++b) {
-				plait_solve_distance(blocks[b], p, NULL, 3600.0f, PLAIT_SWEEP_FORWARD, sim->distance_kernel,
-				                     &sim->parallel);
+				plait_solve_distance(blocks[b], p, on_columns ? &columns : NULL, 3600.0f, PLAIT_SWEEP_FORWARD,
+				                     sim->distance_kernel, &sim->parallel);
 				projections += blocks[b]->count;
 			}
 		}
 		double seconds = now_seconds() - start;
+#if PLAIT_X86_KERNELS
+		if (on_columns) {
+			plait_points_from_columns_avx512(p->point, &columns, 0, p->count);
+		}
+#endif
 		bool identical = true;
 		if (reference == NULL) {
 			particle_count = p->count;

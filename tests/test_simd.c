@@ -77,17 +77,33 @@ static void free_block(plait_distance_block *block)
 typedef void block_maker(plait_distance_block *block, plait_point *points, int count, uint32_t seed,
                          bool rigid);
 
+/* The column kernel's sweep of [begin, end) (AVX-512 only), cut into ranges of `cut`
+ * constraints: most cuts fall inside segments, which a range of a parallel loop may do. */
+static void sweep_columns(plait_distance_block *block, const plait_columns *columns, int begin, int end,
+                          int cut)
+{
+#if PLAIT_X86_KERNELS
+	for (int c = begin; c < end; c += cut) {
+		plait_project_distance_columns_avx512(block, columns, c, c + cut < end ? c + cut : end, 3600.0f);
+	}
+#else
+	(void)block, (void)columns, (void)begin, (void)end, (void)cut;
+#endif
+}
+
 /* A block of count constraints over point_count points from `make`, swept five times by every
  * kernel the processor runs (over [0, split) and then [split, count)), with the batch layouts
- * kept as colouring keeps them (the two ranges as its runs) and without (every batch gathered):
- * each must leave the portable kernel's positions and multipliers, bit for bit. */
+ * kept as colouring keeps them (the two ranges as its runs) and without (every batch gathered),
+ * and by the column kernel on the segments found in those runs (the points copied into columns
+ * and back), its ranges cut every 16 constraints and then every 7 (inside segments): each must
+ * leave the portable kernel's positions and multipliers, bit for bit. */
 static void check_kernels(block_maker *make, int count, int point_count, int split, uint32_t seed, bool rigid)
 {
 	plait_point *reference = malloc(sizeof *reference * (size_t)point_count);
 	float *reference_lambda = malloc(sizeof(float) * (size_t)count);
-	for (int pass = 0; pass < 2 * 3; ++pass) {
-		int l = pass / 2;
-		bool keep_layouts = pass % 2 == 1;
+	for (int pass = 0; pass < 2 * 3 + 2; ++pass) {
+		int l = pass < 6 ? pass / 2 : 2;
+		bool keep_layouts = pass % 2 == 1, columns = pass >= 6;
 		if (!plait_simd_supported(levels[l])) {
 			cr_log_info("simd level %d not supported here: skipped", (int)levels[l]);
 			continue;
@@ -102,15 +118,34 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 		cr_assert_eq(block.compliant_count == 0, rigid);
 		int run_start[3] = {0, split, count}, region_start[2] = {0, 2};
 		unsigned char *layouts = calloc((size_t)count, 1);
-		if (keep_layouts) {
-			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL};
+		plait_segment *segments = calloc((size_t)count, sizeof *segments);
+		if (keep_layouts || columns) {
+			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0};
 			plait_find_batch_layouts(&block, layouts);
 			block.colouring.batch_layout = layouts;
+			block.colouring.segment_count = plait_find_segments(&block, segments);
+			block.colouring.segments = segments;
 		}
-		plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
-		for (int sweep = 0; sweep < 5; ++sweep) {
-			kernel(&block, points, 0, split, 3600.0f);
-			kernel(&block, points, split, count, 3600.0f);
+		if (columns) {
+#if PLAIT_X86_KERNELS
+			float *column = aligned_alloc(64, (sizeof(float) * 4 * (size_t)point_count + 63) / 64 * 64);
+			plait_columns as_columns = {column, column + point_count, column + 2 * point_count,
+			                            column + 3 * point_count};
+			plait_points_to_columns_avx512(points, &as_columns, 0, point_count);
+			memset(points, 0xff, sizeof *points * (size_t)point_count); /* all back from the columns */
+			for (int sweep = 0; sweep < 5; ++sweep) {
+				sweep_columns(&block, &as_columns, 0, split, pass == 6 ? 16 : 7);
+				sweep_columns(&block, &as_columns, split, count, pass == 6 ? 16 : 7);
+			}
+			plait_points_from_columns_avx512(points, &as_columns, 0, point_count);
+			free(column);
+#endif
+		} else {
+			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
+			for (int sweep = 0; sweep < 5; ++sweep) {
+				kernel(&block, points, 0, split, 3600.0f);
+				kernel(&block, points, split, count, 3600.0f);
+			}
 		}
 		for (int i = 0; i < point_count; ++i) {
 			cr_assert(isfinite(points[i].x.x) && isfinite(points[i].x.y) && isfinite(points[i].x.z));
@@ -121,15 +156,16 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 		} else {
 			for (int i = 0; i < point_count; ++i) {
 				cr_assert(memcmp(&reference[i], &points[i], sizeof *points) == 0,
-				          "level %d (layouts kept %d) differs from the portable kernel at point %d of %d "
-				          "constraints (rigid %d)",
-				          (int)levels[l], (int)keep_layouts, i, count, (int)rigid);
+				          "level %d (layouts kept %d, columns %d) differs from the portable kernel at point "
+				          "%d of %d constraints (rigid %d)",
+				          (int)levels[l], (int)keep_layouts, (int)columns, i, count, (int)rigid);
 			}
 			cr_assert(memcmp(reference_lambda, block.lambda, sizeof(float) * (size_t)count) == 0,
-			          "level %d (layouts kept %d) multipliers differ at %d constraints", (int)levels[l],
-			          (int)keep_layouts, count);
+			          "level %d (layouts kept %d, columns %d) multipliers differ at %d constraints",
+			          (int)levels[l], (int)keep_layouts, (int)columns, count);
 		}
 		free(layouts);
+		free(segments);
 		free_block(&block);
 		free(points);
 	}
@@ -280,7 +316,7 @@ Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
 	}
 	/* Kept per position: batches start a multiple of 16 (8) after their run's start. */
 	int run_start[3] = {0, FILLERS, count}, region_start[2] = {0, 2};
-	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL};
+	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0};
 	unsigned char *kept = malloc((size_t)count);
 	memset(kept, 0xff, (size_t)count);
 	plait_find_batch_layouts(&block, kept);

@@ -43,32 +43,41 @@ void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *
 	}
 }
 
-/* The number of constraints from offset (at most `most`) that lie in `layout` (RUNS, PAIRS,
- * SHEAR or SKIP), lane by lane as plait_batch_layout_of tests them; SHEAR and SKIP need two. */
-static int lanes_in_layout(const uint32_t *offset, int most, plait_batch_layout layout)
+/* Whether constraint pair (p, q) joins e0 and e1, either way round: a projection is the same
+ * both ways, bit for bit (swapping the ends negates d exactly), so a segment's constraints may
+ * be stored either way; only its base points are read from its first constraint. */
+static inline bool joins(const uint32_t *pair, uint32_t e0, uint32_t e1)
 {
-	uint32_t a = offset[0], b = offset[1], b1 = most > 1 ? offset[2] : 0;
+	return (pair[0] == e0 && pair[1] == e1) || (pair[0] == e1 && pair[1] == e0);
+}
+
+/* The number of constraints from offset (at most `most`) that lie in segment layout `layout`,
+ * its base points taken from the first constraint as the column kernel takes them
+ * (plait_segment_bases). */
+static int lanes_in_segment(const uint32_t *offset, int most, plait_batch_layout layout)
+{
+	uint32_t a, b;
+	plait_segment_bases(offset, layout, &a, &b);
 	int k = 0;
 	for (; k < most; ++k) {
-		uint32_t on = STEP * (uint32_t)k, even = STEP * (uint32_t)(k & ~1);
+		uint32_t on = STEP * (uint32_t)k, even = STEP * (uint32_t)(k & ~1), odd = STEP * (uint32_t)(k % 2);
+		const uint32_t *pair = offset + 2 * k;
 		bool fits = false;
 		switch (layout) {
 		case PLAIT_LAYOUT_RUNS:
-			fits = offset[2 * k] == a + on && offset[2 * k + 1] == b + on;
+			fits = joins(pair, a + on, b + on);
 			break;
 		case PLAIT_LAYOUT_PAIRS:
-			fits = offset[2 * k] == a + 2 * on && offset[2 * k + 1] == a + 2 * on + STEP;
+			fits = joins(pair, a + 2 * on, a + 2 * on + STEP);
 			break;
-		case PLAIT_LAYOUT_SHEAR: {
-			uint32_t first = k % 2 == 0 ? a + even : b1 + even, second = k % 2 == 0 ? b1 + even : a + even;
-			fits = most > 1 && offset[2 * k] == first && offset[2 * k + 1] == second + STEP;
+		case PLAIT_LAYOUT_SHEAR:
+		case PLAIT_LAYOUT_SHEAR_FLIPPED:
+			fits =
+			    k % 2 == 0 ? joins(pair, a + even, b + even + STEP) : joins(pair, b + even, a + even + STEP);
 			break;
-		}
-		case PLAIT_LAYOUT_SKIP: {
-			uint32_t skipped = a + 2 * even + STEP * (uint32_t)(k % 2);
-			fits = offset[2 * k] == skipped && offset[2 * k + 1] == skipped + 2 * STEP;
+		case PLAIT_LAYOUT_SKIP:
+			fits = joins(pair, a + 2 * even + odd, a + 2 * even + odd + 2 * STEP);
 			break;
-		}
 		default:
 			break;
 		}
@@ -79,31 +88,34 @@ static int lanes_in_layout(const uint32_t *offset, int most, plait_batch_layout 
 	return k;
 }
 
-int plait_find_segments(const plait_distance_block *block, unsigned char *segment)
+int plait_find_segments(const plait_distance_block *block, plait_segment *segments)
 {
 	static const plait_batch_layout layouts[] = {PLAIT_LAYOUT_RUNS, PLAIT_LAYOUT_PAIRS, PLAIT_LAYOUT_SHEAR,
-	                                             PLAIT_LAYOUT_SKIP};
+	                                             PLAIT_LAYOUT_SHEAR_FLIPPED, PLAIT_LAYOUT_SKIP};
 	const plait_colouring *colouring = &block->colouring;
-	int covered = 0;
+	int found = 0;
 	for (int run = 0; run < colouring->run_count; ++run) {
 		int begin = colouring->run_start[run], end = colouring->run_start[run + 1];
-		for (int c = begin; c < end;) {
+		for (int c = begin; c < end; ++found) {
+			const uint32_t *offset = block->point_offset[c];
 			int most = end - c < 16 ? end - c : 16, length = 1;
 			plait_batch_layout best = PLAIT_LAYOUT_GATHER;
-			for (int k = 0; k < 4 && most > 1; ++k) {
-				int lanes = lanes_in_layout(block->point_offset[c], most, layouts[k]);
+			for (int k = 0; k < 5 && most > 1; ++k) {
+				int lanes = lanes_in_segment(offset, most, layouts[k]);
 				if (lanes > length) {
 					length = lanes;
 					best = layouts[k];
 				}
 			}
-			segment[c] = (unsigned char)((unsigned)best << 5 | (unsigned)length);
-			for (int k = 1; k < length; ++k) {
-				segment[c + k] = 0;
+			if (segments != NULL) {
+				plait_segment *segment = &segments[found];
+				segment->start = c;
+				plait_segment_bases(offset, best, &segment->a, &segment->b);
+				segment->layout = (unsigned char)best;
+				segment->length = (unsigned char)length;
 			}
-			covered += length > 1 ? length : 0;
 			c += length;
 		}
 	}
-	return covered;
+	return found;
 }

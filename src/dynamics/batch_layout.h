@@ -27,6 +27,8 @@ typedef enum plait_batch_layout {
 	PLAIT_LAYOUT_PAIRS,
 	PLAIT_LAYOUT_SHEAR,
 	PLAIT_LAYOUT_SKIP,
+	/* Segments only: SHEAR with a taken from the first constraint's second point. */
+	PLAIT_LAYOUT_SHEAR_FLIPPED,
 } plait_batch_layout;
 
 /* The layouts kept for a position: 16 lanes from it, and 8. */
@@ -51,23 +53,51 @@ plait_batch_layout plait_batch_layout_of(const uint32_t *offset, int lanes);
 void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *layout);
 
 /* Segments: the same layouts, for the column kernel (distance_columns_avx512.c), which needs
- * no batch to start at a multiple of 16 and masks a short one at no cost. Each coloured run
- * is cut, from its start, into the longest prefixes of at most 16 constraints that lie in one
- * layout; a constraint that begins none (two or more) is a segment of one, projected alone.
- * segment[c] is nonzero where a segment starts: bits 0-4 its length (1 to 16), bits 5-7 its
- * layout; zero inside one. */
-static inline int plait_segment_length(unsigned char kept)
+ * no batch to start at a multiple of 16 and masks a short one at no cost, and whose constraints
+ * may join their points either way round. Each coloured run is cut, from its start, into the
+ * longest prefixes of at most 16 constraints that lie in one layout; a constraint that begins
+ * none (of two or more) is a segment of one, projected alone. A segment keeps its base points,
+ * so the kernel reads neither the constraints' points nor their offsets: at hang-512 those are
+ * 12.5 MB a sweep, the segments under 2 MB. */
+typedef struct plait_segment {
+	int start;            /* its first constraint */
+	uint32_t a, b;        /* base points (byte offsets): plait_segment_bases, or a lone pair's ends */
+	unsigned char layout; /* plait_batch_layout; PLAIT_LAYOUT_GATHER: a constraint alone */
+	unsigned char length; /* 1 to 16 */
+} plait_segment;
+
+/* The base points (byte offsets) of a segment in `layout` whose first constraint is
+ * offset[0], offset[1]: a and b of RUNS (constraint k joins a + k and b + k); a of PAIRS and
+ * SKIP (the lower point); a and b1 of SHEAR (constraint 2m joins a + 2m and b1 + 2m + 1,
+ * constraint 2m + 1 joins b1 + 2m and a + 2m + 1), a the first point, or the second when
+ * FLIPPED. */
+static inline void plait_segment_bases(const uint32_t *offset, plait_batch_layout layout, uint32_t *a,
+                                       uint32_t *b)
 {
-	return kept & 31;
+	uint32_t step = (uint32_t)sizeof(plait_point), lower = offset[0] < offset[1] ? offset[0] : offset[1];
+	switch (layout) {
+	case PLAIT_LAYOUT_PAIRS:
+	case PLAIT_LAYOUT_SKIP:
+		*a = lower;
+		*b = lower;
+		break;
+	case PLAIT_LAYOUT_SHEAR:
+		*a = offset[0];
+		*b = offset[1] - step;
+		break;
+	case PLAIT_LAYOUT_SHEAR_FLIPPED:
+		*a = offset[1];
+		*b = offset[0] - step;
+		break;
+	default:
+		*a = offset[0];
+		*b = offset[1];
+		break;
+	}
 }
 
-static inline plait_batch_layout plait_segment_layout(unsigned char kept)
-{
-	return (plait_batch_layout)(kept >> 5);
-}
-
-/* Fills segment[] (plait_colouring_end(&block->colouring) bytes) and returns how many of the
- * block's coloured constraints lie in segments of two or more. */
-int plait_find_segments(const plait_distance_block *block, unsigned char *segment);
+/* The segments of block's coloured runs, in order, into segments[] (NULL: only counted);
+ * returns how many. */
+int plait_find_segments(const plait_distance_block *block, plait_segment *segments);
 
 #endif

@@ -1,5 +1,6 @@
 #include "dynamics/colouring.h"
 
+#include <limits.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -12,7 +13,7 @@ void plait_colouring_clear(plait_colouring *colouring, const plait_allocator *al
 	plait_free(allocator, colouring->region_start);
 	plait_free(allocator, colouring->run_start);
 	plait_free(allocator, colouring->batch_layout);
-	plait_free(allocator, colouring->segment);
+	plait_free(allocator, colouring->segments);
 	memset(colouring, 0, sizeof *colouring);
 }
 
@@ -172,15 +173,6 @@ static void permute(char *scratch, void *data, size_t size, int count, const int
 
 enum { DISTANCE_BLOCKS = 3, BLOCKS = DISTANCE_BLOCKS + 1 };
 
-static int count_segments(const unsigned char *segment, int count)
-{
-	int segments = 0;
-	for (int c = 0; c < count; ++c) {
-		segments += segment[c] != 0;
-	}
-	return segments;
-}
-
 /* Whether the distance blocks are projected on the points as columns (solver.c, "Columns"),
  * and room for the columns. A segment costs the column kernel about what a whole batch of 16
  * costs the point kernel, and a segment of one (a constraint in no layout) about twice a
@@ -237,7 +229,6 @@ bool plait_sim_colour(plait_sim *sim)
 	char *scratch = plait_alloc(a, sizeof bend->quad[0] * (size_t)largest);
 	int *orders[BLOCKS] = {NULL, NULL, NULL, NULL};
 	unsigned char *layouts[DISTANCE_BLOCKS] = {NULL, NULL, NULL};
-	unsigned char *segments[DISTANCE_BLOCKS] = {NULL, NULL, NULL};
 	plait_colouring colourings[BLOCKS];
 	memset(colourings, 0, sizeof colourings);
 	bool ok = scratch != NULL;
@@ -248,8 +239,7 @@ bool plait_sim_colour(plait_sim *sim)
 	}
 	for (int k = 0; k < DISTANCE_BLOCKS && ok; ++k) {
 		layouts[k] = plait_alloc(a, (size_t)(counts[k] > 0 ? counts[k] : 1));
-		segments[k] = plait_alloc(a, (size_t)(counts[k] > 0 ? counts[k] : 1));
-		ok = layouts[k] != NULL && segments[k] != NULL;
+		ok = layouts[k] != NULL;
 	}
 	if (ok) {
 		int segment_count = 0;
@@ -266,10 +256,15 @@ bool plait_sim_colour(plait_sim *sim)
 			b->colouring.batch_layout = layouts[k];
 			layouts[k] = NULL;
 			plait_find_batch_layouts(b, b->colouring.batch_layout);
-			b->colouring.segment = segments[k];
-			segments[k] = NULL;
-			(void)plait_find_segments(b, b->colouring.segment);
-			segment_count += count_segments(b->colouring.segment, plait_colouring_end(&b->colouring));
+			/* Without the memory for them, no segments: only the columns go. */
+			int found = plait_find_segments(b, NULL);
+			b->colouring.segments = found > 0 ? plait_alloc(a, sizeof(plait_segment) * (size_t)found) : NULL;
+			if (b->colouring.segments != NULL) {
+				b->colouring.segment_count = plait_find_segments(b, b->colouring.segments);
+				segment_count += found;
+			} else if (found > 0) {
+				segment_count = INT_MAX / 16;
+			}
 		}
 		choose_columns(sim, segment_count);
 		const int *order = orders[DISTANCE_BLOCKS];
@@ -287,7 +282,6 @@ bool plait_sim_colour(plait_sim *sim)
 	}
 	for (int k = 0; k < DISTANCE_BLOCKS; ++k) {
 		plait_free(a, layouts[k]);
-		plait_free(a, segments[k]);
 	}
 	for (int k = 0; k < BLOCKS; ++k) {
 		plait_free(a, orders[k]);

@@ -107,12 +107,13 @@ static inline __attribute__((always_inline)) __m512 step_of(__m512 dx, __m512 dy
  * b1 + 2m + 1, constraint 2m + 1 joins b1 + 2m and a + 2m + 1: lane k holds a + k and, after a
  * swap, b1 + (k ^ 1)): constraint k in lane k. */
 static inline __attribute__((always_inline)) void project_two_rows(plait_distance_block *block,
-                                                                   const plait_columns *columns, int c, int n,
+                                                                   const plait_columns *columns,
+                                                                   const plait_segment *segment, int n,
                                                                    __m512 ih2, bool rigid, bool shear)
 {
+	int c = segment->start;
 	__mmask16 constraints = (__mmask16)((1u << n) - 1u);
-	uint32_t a = index_of(block->point_offset[c][0]);
-	uint32_t b = shear ? index_of(block->point_offset[c + 1][0]) : index_of(block->point_offset[c][1]);
+	uint32_t a = index_of(segment->a), b = index_of(segment->b);
 	/* A shear segment's second row holds constraint k's point in lane k ^ 1. */
 	__mmask16 second =
 	    shear ? (__mmask16)(((constraints & 0x5555u) << 1) | ((constraints & 0xAAAAu) >> 1)) : constraints;
@@ -158,11 +159,13 @@ static inline __attribute__((always_inline)) void project_two_rows(plait_distanc
  * a + 4m + 2, constraint 2m + 1 joins a + 4m + 1 and a + 4m + 3): 16 consecutive points, 8
  * constraints, a vector; each lane computes its constraint with its partner's coordinates. */
 static inline __attribute__((always_inline)) void project_one_row(plait_distance_block *block,
-                                                                  const plait_columns *columns, int c, int n,
+                                                                  const plait_columns *columns,
+                                                                  const plait_segment *segment, int n,
                                                                   __m512 ih2, bool rigid, bool skip)
 {
+	int c = segment->start;
 	__mmask16 constraints = (__mmask16)((1u << n) - 1u);
-	uint32_t a = index_of(block->point_offset[c][0]);
+	uint32_t a = index_of(segment->a);
 	__m512 lambdas[2] = {_mm512_setzero_ps(), _mm512_setzero_ps()};
 	for (int g = 0; 8 * g < n; ++g) {
 		int here = n - 8 * g < 8 ? n - 8 * g : 8;
@@ -209,9 +212,9 @@ static inline __attribute__((always_inline)) void project_one_row(plait_distance
 /* One constraint, as distance_scalar.c. */
 static inline __attribute__((always_inline)) void project_alone(plait_distance_block *block,
                                                                 const plait_columns *columns, int c,
+                                                                uint32_t i, uint32_t j,
                                                                 float inverse_h_squared, bool rigid)
 {
-	int i = block->pair[c][0], j = block->pair[c][1];
 	float *x = columns->x, *y = columns->y, *z = columns->z;
 	float wi = columns->w[i], wj = columns->w[j];
 	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
@@ -246,45 +249,70 @@ static inline __attribute__((always_inline)) void project_alone(plait_distance_b
 	z[j] = z[j] + sj * dz;
 }
 
+/* The last segment starting at or before constraint c (the block has segments, c coloured). */
+static int segment_at(const plait_colouring *colouring, int c)
+{
+	int low = 0, high = colouring->segment_count - 1;
+	while (low < high) {
+		int middle = (low + high + 1) / 2;
+		if (colouring->segments[middle].start <= c) {
+			low = middle;
+		} else {
+			high = middle - 1;
+		}
+	}
+	return low;
+}
+
 static inline __attribute__((always_inline)) void project_columns(plait_distance_block *block,
                                                                   const plait_columns *columns, int begin,
                                                                   int end, float inverse_h_squared,
                                                                   bool rigid)
 {
 	const __m512 ih2 = _mm512_set1_ps(inverse_h_squared);
-	const unsigned char *segment = block->colouring.segment;
-	int coloured = plait_colouring_end(&block->colouring);
-	for (int c = begin; c < end;) {
-		/* Inside a segment (a range cut through it) or past the coloured constraints: one at a
-		 * time up to the next segment. */
-		unsigned char kept = segment != NULL && c < coloured ? segment[c] : 0;
-		int length = plait_segment_length(kept);
-		if (length < 2) {
-			project_alone(block, columns, c, inverse_h_squared, rigid);
-			++c;
-			continue;
-		}
-		int n = end - c < length ? end - c : length;
-		switch (plait_segment_layout(kept)) {
-		case PLAIT_LAYOUT_RUNS:
-			project_two_rows(block, columns, c, n, ih2, rigid, false);
-			break;
-		case PLAIT_LAYOUT_SHEAR:
-			project_two_rows(block, columns, c, n, ih2, rigid, true);
-			break;
-		case PLAIT_LAYOUT_PAIRS:
-			project_one_row(block, columns, c, n, ih2, rigid, false);
-			break;
-		case PLAIT_LAYOUT_SKIP:
-			project_one_row(block, columns, c, n, ih2, rigid, true);
-			break;
-		default: /* (no other layout is kept with a length) */
-			for (int k = 0; k < n; ++k) {
-				project_alone(block, columns, c + k, inverse_h_squared, rigid);
+	const plait_colouring *colouring = &block->colouring;
+	int coloured = plait_colouring_end(colouring);
+	int c = begin;
+	if (colouring->segments != NULL && c < coloured) {
+		int k = segment_at(colouring, c);
+		/* A range cut through a segment: its constraints in the range one at a time. */
+		int cut_end = colouring->segments[k].start + colouring->segments[k].length;
+		if (colouring->segments[k].start < c) {
+			for (; c < cut_end && c < end; ++c) {
+				project_alone(block, columns, c, (uint32_t)block->pair[c][0], (uint32_t)block->pair[c][1],
+				              inverse_h_squared, rigid);
 			}
-			break;
+			++k;
 		}
-		c += n;
+		for (; c < end && c < coloured; ++k) {
+			const plait_segment *segment = &colouring->segments[k];
+			int n = end - c < segment->length ? end - c : segment->length;
+			switch ((plait_batch_layout)segment->layout) {
+			case PLAIT_LAYOUT_RUNS:
+				project_two_rows(block, columns, segment, n, ih2, rigid, false);
+				break;
+			case PLAIT_LAYOUT_SHEAR:
+			case PLAIT_LAYOUT_SHEAR_FLIPPED:
+				project_two_rows(block, columns, segment, n, ih2, rigid, true);
+				break;
+			case PLAIT_LAYOUT_PAIRS:
+				project_one_row(block, columns, segment, n, ih2, rigid, false);
+				break;
+			case PLAIT_LAYOUT_SKIP:
+				project_one_row(block, columns, segment, n, ih2, rigid, true);
+				break;
+			default: /* a constraint alone: its ends are a and b */
+				project_alone(block, columns, c, index_of(segment->a), index_of(segment->b),
+				              inverse_h_squared, rigid);
+				break;
+			}
+			c += n;
+		}
+	}
+	/* Without segments, or past the coloured constraints: one at a time. */
+	for (; c < end; ++c) {
+		project_alone(block, columns, c, (uint32_t)block->pair[c][0], (uint32_t)block->pair[c][1],
+		              inverse_h_squared, rigid);
 	}
 }
 

@@ -132,7 +132,8 @@ typedef struct plait_colouring {
 	 * (dynamics/batch_layout.h), or NULL: every batch gathered. */
 	unsigned char *batch_layout;
 	/* Distance blocks: the segments of the column kernel (dynamics/batch_layout.h), or NULL. */
-	unsigned char *segment;
+	struct plait_segment *segments;
+	int segment_count;
 } plait_colouring;
 
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
