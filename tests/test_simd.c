@@ -332,6 +332,108 @@ Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
 	free(points);
 }
 
+/* The segments found in make_layout_block's batches (after its FILLERS constraints, in a run
+ * of their own): a whole batch where it was laid out, and around a moved lane the longest
+ * prefixes that still lie in a layout, the constraints between alone; a shuffled batch's
+ * constraints all alone. With every constraint turned the other way round, the same segments. */
+Test(simd, segments_are_found_in_the_layouts_they_lie_in)
+{
+	/* Per kind: the lengths of its segments and their layout (G: alone). */
+	enum { R = PLAIT_LAYOUT_RUNS, P = PLAIT_LAYOUT_PAIRS, S = PLAIT_LAYOUT_SHEAR, K = PLAIT_LAYOUT_SKIP };
+	enum { G = PLAIT_LAYOUT_GATHER };
+	const int lengths[LAYOUT_KINDS][17] = {
+	    {16}, {16},      {16},      {16},          {16},
+	    {16}, {15, 1},   {7, 1, 8}, {10, 1, 1, 4}, {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1},
+	    {16}, {5, 1, 10}};
+	const int layouts[LAYOUT_KINDS][17] = {
+	    {R}, {R},      {P},       {P},          {S},
+	    {S}, {R, G},   {P, G, P}, {S, G, G, S}, {G, G, G, G, G, G, G, G, G, G, G, G, G, G, G, G},
+	    {K}, {K, G, K}};
+	int count = FILLERS + 16 * LAYOUT_KINDS;
+	for (int flip = 0; flip < 2; ++flip) {
+		plait_distance_block block;
+		memset(&block, 0, sizeof block);
+		plait_point *points = calloc((size_t)layout_point_count(count), sizeof *points);
+		make_layout_block(&block, points, count, 5u, false);
+		for (int c = 0; flip && c < count; ++c) {
+			uint32_t first = block.point_offset[c][0];
+			block.point_offset[c][0] = block.point_offset[c][1];
+			block.point_offset[c][1] = first;
+		}
+		int run_start[3] = {0, FILLERS, count}, region_start[2] = {0, 2};
+		block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0};
+		plait_segment *segments = calloc((size_t)count, sizeof *segments);
+		int found = plait_find_segments(&block, segments);
+		cr_assert_eq(plait_find_segments(&block, NULL), found);
+		/* The fillers join points 2 f + 1 and 2 f: neighbours the other way round. */
+		cr_assert(segments[0].start == 0 && segments[0].length == FILLERS && segments[0].layout == P);
+		int k = 1, c = FILLERS;
+		for (int batch = 0; batch < LAYOUT_KINDS; ++batch) {
+			for (int m = 0; m < 17 && lengths[batch][m] > 0; ++m, ++k) {
+				cr_assert(k < found);
+				cr_assert_eq(segments[k].start, c, "flip %d, batch %d, segment %d", flip, batch, m);
+				cr_assert_eq(segments[k].length, lengths[batch][m], "flip %d, batch %d, segment %d", flip,
+				             batch, m);
+				cr_assert_eq(segments[k].layout == PLAIT_LAYOUT_SHEAR_FLIPPED ? S : segments[k].layout,
+				             layouts[batch][m], "flip %d, batch %d, segment %d", flip, batch, m);
+				c += segments[k].length;
+			}
+		}
+		cr_assert_eq(found, k);
+		cr_assert_eq(c, count);
+		free(segments);
+		free_block(&block);
+		free(points);
+	}
+}
+
+/* A grid cloth is projected on columns with AVX-512 (its segments hold about 14 constraints);
+ * with AVX2 or the portable kernel it is not, nor is a cloth whose vertices are numbered at
+ * random (its constraints lie in no layout). */
+Test(simd, a_grid_cloth_is_projected_on_columns_and_a_scrambled_one_is_not)
+{
+	for (int scrambled = 0; scrambled < 2; ++scrambled) {
+		for (int l = 0; l < 3; ++l) {
+			if (!plait_simd_is_supported(levels[l])) {
+				continue;
+			}
+			plait_world_def wdef = plait_default_world_def();
+			wdef.simd = levels[l];
+			plait_world_id world = plait_create_world(&wdef, NULL);
+			test_grid grid = test_grid_make(64, 64, 2.0f, 2.0f);
+			if (scrambled) {
+				/* Vertex v becomes (v * 2654435761) mod n: n = 4096, an odd multiplier, a permutation. */
+				int n = grid.vertex_count;
+				plait_vec3 *moved = malloc(sizeof *moved * (size_t)n);
+				for (int v = 0; v < n; ++v) {
+					moved[(int)(((uint32_t)v * 2654435761u) % (uint32_t)n)] = grid.positions[v];
+				}
+				memcpy(grid.positions, moved, sizeof *moved * (size_t)n);
+				free(moved);
+				int corners = 0;
+				for (int f = 0; f < grid.face_count; ++f) {
+					corners += grid.face_sizes[f];
+				}
+				for (int k = 0; k < corners; ++k) {
+					grid.face_indices[k] =
+					    (int)(((uint32_t)grid.face_indices[k] * 2654435761u) % (uint32_t)n);
+				}
+			}
+			plait_cloth_def def = plait_default_cloth_def();
+			def.mesh = test_grid_mesh(&grid);
+			def.bend_model = PLAIT_BEND_DISTANCE;
+			cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, NULL)));
+			cr_assert(test_step_frames(world, 1));
+			const plait_sim *sim = &world.world->sim;
+			bool expected = !scrambled && levels[l] == PLAIT_SIMD_AVX512;
+			cr_assert_eq(sim->use_columns, expected, "level %d, scrambled %d", (int)levels[l], scrambled);
+			cr_assert(!sim->in_columns, "a step ends with the points in the point array");
+			plait_destroy_world(world);
+			test_grid_free(&grid);
+		}
+	}
+}
+
 /* Once coloured, a grid cloth's distance blocks keep the layout of each batch that starts a
  * multiple of 16 (8) after its run's start and ends in it, as plait_batch_layout_of finds it, and
  * gathered elsewhere; and most of each block's batches (68-78% at 128 x 128) are kept in a layout
