@@ -70,37 +70,44 @@ static inline lane_values load_lane_values(const plait_distance_block *block, in
 	return v;
 }
 
-/* The step s of each lane in `update` (zero elsewhere), and the multiplier after it (compliant
- * blocks); distance_avx512.c's project16, operation for operation. */
-static inline __attribute__((always_inline)) __m512 step_of(__m512 dx, __m512 dy, __m512 dz, __m512 w_sum,
-                                                            __mmask16 update, const lane_values *v,
-                                                            __m512 ih2, bool rigid, __m512 *lambda)
+/* The step of each lane as a quotient, before its division: s = numerator / denominator in the
+ * lanes of `use` (zero elsewhere), and the lane's length for the multiplier (compliant blocks:
+ * lambda += s length). distance_avx512.c's project16, operation for operation. */
+typedef struct step_parts {
+	__m512 numerator, denominator, length;
+	__mmask16 use;
+} step_parts;
+
+static inline __attribute__((always_inline)) step_parts parts_of(__m512 dx, __m512 dy, __m512 dz,
+                                                                 __m512 w_sum, __mmask16 update,
+                                                                 const lane_values *v, __m512 ih2, bool rigid)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
+	step_parts parts;
 	__m512 length_sq =
 	    _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
 	if (rigid) {
 		__m512 rest_sq = _mm512_mul_ps(v->rest, v->rest);
 		__m512 sum_sq = _mm512_max_ps(_mm512_add_ps(length_sq, rest_sq), _mm512_set1_ps(1e-24f));
-		__mmask16 moving = _mm512_mask_cmp_ps_mask(update, w_sum, zero, _CMP_GT_OQ);
-		__m512 denominator = _mm512_mask_blend_ps(moving, one, _mm512_mul_ps(w_sum, sum_sq));
-		return _mm512_maskz_mov_ps(moving, _mm512_div_ps(_mm512_sub_ps(rest_sq, length_sq), denominator));
+		parts.use = _mm512_mask_cmp_ps_mask(update, w_sum, zero, _CMP_GT_OQ);
+		parts.denominator = _mm512_mask_blend_ps(parts.use, one, _mm512_mul_ps(w_sum, sum_sq));
+		parts.numerator = _mm512_sub_ps(rest_sq, length_sq);
+		parts.length = zero;
+		return parts;
 	}
 	__m512 length = _mm512_max_ps(_mm512_sqrt_ps(length_sq), _mm512_set1_ps(1e-12f));
 	__m512 C = _mm512_sub_ps(length, v->rest);
 	__mmask16 stretched = _mm512_cmp_ps_mask(C, zero, _CMP_GT_OQ);
 	__m512 alpha = _mm512_mask_blend_ps(stretched, v->compression, v->tension);
 	__mmask16 moving = _mm512_cmp_ps_mask(w_sum, zero, _CMP_GT_OQ);
-	__mmask16 active = _mm512_mask_cmp_ps_mask(moving & update, alpha, zero, _CMP_GE_OQ);
+	parts.use = _mm512_mask_cmp_ps_mask(moving & update, alpha, zero, _CMP_GE_OQ);
 	__m512 alpha_tilde = _mm512_mul_ps(_mm512_max_ps(alpha, zero), ih2);
 	__m512 denominator = _mm512_mul_ps(_mm512_add_ps(w_sum, alpha_tilde), length);
-	denominator = _mm512_mask_blend_ps(moving, one, denominator);
-	__m512 s = _mm512_div_ps(
-	    _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(-0.0f), C), _mm512_mul_ps(alpha_tilde, v->lambda)),
-	    denominator);
-	s = _mm512_maskz_mov_ps(active, s);
-	*lambda = _mm512_add_ps(v->lambda, _mm512_mul_ps(s, length));
-	return s;
+	parts.denominator = _mm512_mask_blend_ps(moving, one, denominator);
+	parts.numerator =
+	    _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(-0.0f), C), _mm512_mul_ps(alpha_tilde, v->lambda));
+	parts.length = length;
+	return parts;
 }
 
 /* RUNS (constraint k joins a + k and b + k) and SHEAR (constraint 2m joins a + 2m and
@@ -133,10 +140,11 @@ static inline __attribute__((always_inline)) void project_two_rows(plait_distanc
 	}
 	lane_values v = load_lane_values(block, c, constraints, rigid, false, _mm512_setzero_si512());
 	__m512 dx = _mm512_sub_ps(xj, xi), dy = _mm512_sub_ps(yj, yi), dz = _mm512_sub_ps(zj, zi);
-	__m512 lambda;
-	__m512 s = step_of(dx, dy, dz, _mm512_add_ps(wi, wj), constraints, &v, ih2, rigid, &lambda);
+	step_parts parts = parts_of(dx, dy, dz, _mm512_add_ps(wi, wj), constraints, &v, ih2, rigid);
+	__m512 s = _mm512_maskz_mov_ps(parts.use, _mm512_div_ps(parts.numerator, parts.denominator));
 	if (!rigid) {
-		_mm512_mask_storeu_ps(block->lambda + c, constraints, lambda);
+		_mm512_mask_storeu_ps(block->lambda + c, constraints,
+		                      _mm512_add_ps(v.lambda, _mm512_mul_ps(s, parts.length)));
 	}
 	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
 	_mm512_mask_storeu_ps(columns->x + a, constraints, _mm512_sub_ps(xi, _mm512_mul_ps(si, dx)));
@@ -157,17 +165,22 @@ static inline __attribute__((always_inline)) void project_two_rows(plait_distanc
 
 /* PAIRS (constraint k joins a + 2k and a + 2k + 1) and SKIP (constraint 2m joins a + 4m and
  * a + 4m + 2, constraint 2m + 1 joins a + 4m + 1 and a + 4m + 3): 16 consecutive points, 8
- * constraints, a vector; each lane computes its constraint with its partner's coordinates. */
-static inline __attribute__((always_inline)) void project_one_row(plait_distance_block *block,
-                                                                  const plait_columns *columns,
-                                                                  const plait_segment *segment, int n,
-                                                                  __m512 ih2, bool rigid, bool skip)
+ * constraints, a vector; each lane computes its constraint with its partner's coordinates. The
+ * two ends of a constraint hold the same quotient, so a segment of more than 8 (`vectors` 2)
+ * packs its first ends' into one register and divides once (a division is the costliest step
+ * here). */
+static inline __attribute__((always_inline)) void
+project_one_row(plait_distance_block *block, const plait_columns *columns, const plait_segment *segment,
+                int n, __m512 ih2, bool rigid, bool skip, int vectors)
 {
 	int c = segment->start;
 	__mmask16 constraints = (__mmask16)((1u << n) - 1u);
 	uint32_t a = index_of(segment->a);
-	__m512 lambdas[2] = {_mm512_setzero_ps(), _mm512_setzero_ps()};
-	for (int g = 0; 8 * g < n; ++g) {
+	__m512 px[2], py[2], pz[2], w[2], dx[2], dy[2], dz[2], lambda[2];
+	__mmask16 update[2];
+	__m512i spread[2];
+	step_parts parts[2];
+	for (int g = 0; g < vectors; ++g) {
 		int here = n - 8 * g < 8 ? n - 8 * g : 8;
 		/* The lanes of this vector's `here` constraints. */
 		unsigned lanes;
@@ -177,35 +190,53 @@ static inline __attribute__((always_inline)) void project_one_row(plait_distance
 		} else {
 			lanes = (1u << (2 * here)) - 1u;
 		}
-		__mmask16 update = (__mmask16)lanes;
-		const float *x = columns->x + a + 16 * g, *y = columns->y + a + 16 * g, *z = columns->z + a + 16 * g;
-		__m512 px = _mm512_maskz_loadu_ps(update, x), py = _mm512_maskz_loadu_ps(update, y);
-		__m512 pz = _mm512_maskz_loadu_ps(update, z);
-		__m512 w = _mm512_maskz_loadu_ps(update, columns->w + a + 16 * g);
+		update[g] = (__mmask16)lanes;
+		uint32_t at = a + 16 * (uint32_t)g;
+		px[g] = _mm512_maskz_loadu_ps(update[g], columns->x + at);
+		py[g] = _mm512_maskz_loadu_ps(update[g], columns->y + at);
+		pz[g] = _mm512_maskz_loadu_ps(update[g], columns->z + at);
+		w[g] = _mm512_maskz_loadu_ps(update[g], columns->w + at);
 		__m512 qx, qy, qz, qw;
 		if (skip) {
-			qx = _mm512_permute_ps(px, SWAP_HALVES);
-			qy = _mm512_permute_ps(py, SWAP_HALVES);
-			qz = _mm512_permute_ps(pz, SWAP_HALVES);
-			qw = _mm512_permute_ps(w, SWAP_HALVES);
+			qx = _mm512_permute_ps(px[g], SWAP_HALVES);
+			qy = _mm512_permute_ps(py[g], SWAP_HALVES);
+			qz = _mm512_permute_ps(pz[g], SWAP_HALVES);
+			qw = _mm512_permute_ps(w[g], SWAP_HALVES);
 		} else {
-			qx = _mm512_permute_ps(px, SWAP_NEIGHBOURS);
-			qy = _mm512_permute_ps(py, SWAP_NEIGHBOURS);
-			qz = _mm512_permute_ps(pz, SWAP_NEIGHBOURS);
-			qw = _mm512_permute_ps(w, SWAP_NEIGHBOURS);
+			qx = _mm512_permute_ps(px[g], SWAP_NEIGHBOURS);
+			qy = _mm512_permute_ps(py[g], SWAP_NEIGHBOURS);
+			qz = _mm512_permute_ps(pz[g], SWAP_NEIGHBOURS);
+			qw = _mm512_permute_ps(w[g], SWAP_NEIGHBOURS);
 		}
-		__m512i spread = _mm512_add_epi32(skip ? SKIP_LANES : PAIRS_LANES, _mm512_set1_epi32(8 * g));
-		lane_values v = load_lane_values(block, c, constraints, rigid, true, spread);
-		__m512 dx = _mm512_sub_ps(qx, px), dy = _mm512_sub_ps(qy, py), dz = _mm512_sub_ps(qz, pz);
-		__m512 s = step_of(dx, dy, dz, _mm512_add_ps(w, qw), update, &v, ih2, rigid, &lambdas[g]);
-		__m512 sw = _mm512_mul_ps(w, s);
-		_mm512_mask_storeu_ps((float *)x, update, _mm512_sub_ps(px, _mm512_mul_ps(sw, dx)));
-		_mm512_mask_storeu_ps((float *)y, update, _mm512_sub_ps(py, _mm512_mul_ps(sw, dy)));
-		_mm512_mask_storeu_ps((float *)z, update, _mm512_sub_ps(pz, _mm512_mul_ps(sw, dz)));
+		spread[g] = _mm512_add_epi32(skip ? SKIP_LANES : PAIRS_LANES, _mm512_set1_epi32(8 * g));
+		lane_values v = load_lane_values(block, c, constraints, rigid, true, spread[g]);
+		lambda[g] = v.lambda;
+		dx[g] = _mm512_sub_ps(qx, px[g]);
+		dy[g] = _mm512_sub_ps(qy, py[g]);
+		dz[g] = _mm512_sub_ps(qz, pz[g]);
+		parts[g] = parts_of(dx[g], dy[g], dz[g], _mm512_add_ps(w[g], qw), update[g], &v, ih2, rigid);
+	}
+	const __m512i firsts = skip ? SKIP_FIRSTS : PAIRS_FIRSTS;
+	__m512 quotients =
+	    vectors == 1
+	        ? _mm512_setzero_ps()
+	        : _mm512_div_ps(_mm512_permutex2var_ps(parts[0].numerator, firsts, parts[1].numerator),
+	                        _mm512_permutex2var_ps(parts[0].denominator, firsts, parts[1].denominator));
+	for (int g = 0; g < vectors; ++g) {
+		__m512 quotient = vectors == 1 ? _mm512_div_ps(parts[g].numerator, parts[g].denominator)
+		                               : _mm512_permutexvar_ps(spread[g], quotients);
+		__m512 s = _mm512_maskz_mov_ps(parts[g].use, quotient);
+		lambda[g] = _mm512_add_ps(lambda[g], _mm512_mul_ps(s, parts[g].length));
+		__m512 sw = _mm512_mul_ps(w[g], s);
+		uint32_t at = a + 16 * (uint32_t)g;
+		_mm512_mask_storeu_ps(columns->x + at, update[g], _mm512_sub_ps(px[g], _mm512_mul_ps(sw, dx[g])));
+		_mm512_mask_storeu_ps(columns->y + at, update[g], _mm512_sub_ps(py[g], _mm512_mul_ps(sw, dy[g])));
+		_mm512_mask_storeu_ps(columns->z + at, update[g], _mm512_sub_ps(pz[g], _mm512_mul_ps(sw, dz[g])));
 	}
 	if (!rigid) {
-		__m512 firsts = _mm512_permutex2var_ps(lambdas[0], skip ? SKIP_FIRSTS : PAIRS_FIRSTS, lambdas[1]);
-		_mm512_mask_storeu_ps(block->lambda + c, constraints, firsts);
+		__m512 second = vectors == 2 ? lambda[1] : _mm512_setzero_ps();
+		_mm512_mask_storeu_ps(block->lambda + c, constraints,
+		                      _mm512_permutex2var_ps(lambda[0], firsts, second));
 	}
 }
 
@@ -295,11 +326,20 @@ static inline __attribute__((always_inline)) void project_columns(plait_distance
 			case PLAIT_LAYOUT_SHEAR_FLIPPED:
 				project_two_rows(block, columns, segment, n, ih2, rigid, true);
 				break;
+			/* One vector or two: each a constant, for a copy of its own with its loops unrolled. */
 			case PLAIT_LAYOUT_PAIRS:
-				project_one_row(block, columns, segment, n, ih2, rigid, false);
+				if (n > 8) {
+					project_one_row(block, columns, segment, n, ih2, rigid, false, 2);
+				} else {
+					project_one_row(block, columns, segment, n, ih2, rigid, false, 1);
+				}
 				break;
 			case PLAIT_LAYOUT_SKIP:
-				project_one_row(block, columns, segment, n, ih2, rigid, true);
+				if (n > 8) {
+					project_one_row(block, columns, segment, n, ih2, rigid, true, 2);
+				} else {
+					project_one_row(block, columns, segment, n, ih2, rigid, true, 1);
+				}
 				break;
 			default: /* a constraint alone: its ends are a and b */
 				project_alone(block, columns, c, index_of(segment->a), index_of(segment->b),
