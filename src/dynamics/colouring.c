@@ -177,9 +177,8 @@ enum { DISTANCE_BLOCKS = 3, BLOCKS = DISTANCE_BLOCKS + 1 };
  * and room for the columns. A segment costs the column kernel about what a whole batch of 16
  * costs the point kernel, and a segment of one (a constraint in no layout) about twice a
  * gathered batch's share, so columns pay when segments hold 8 constraints or more on average:
- * a grid cloth's hold about 15, a scanned mesh's nearer one. They need AVX-512 (the gathers
- * of AVX2 cost more than the transposes they would save). Without the memory they are not
- * used: that only costs speed. */
+ * a grid cloth's hold about 14, a scanned mesh's nearer one. The column kernel exists for
+ * AVX-512 only. Without the memory they are not used: that only costs speed. */
 static void choose_columns(plait_sim *sim, int segment_count)
 {
 	int constraints = sim->stretch.count + sim->shear.count + sim->bend_distance.count;
