@@ -95,18 +95,17 @@ int main(int argc, char **argv)
 			p->point[i].x.y += 0.01f * (float)((i * 7919) % 13) / 13.0f;
 		}
 		plait_distance_block *blocks[] = {&sim->stretch, &sim->shear, &sim->bend_distance};
-		plait_columns columns = {sim->column_x, sim->column_y, sim->column_z, sim->column_w};
-		bool on_columns = l == 3;
+		plait_columns columns = {sim->column_x, sim->column_y, sim->column_z, sim->column_w,
+		                         sim->column_ops.project};
+		bool on_columns = l >= 3;
 		if (on_columns && !sim->use_columns) {
-			printf("simd=columns n=%d used=no\n", n);
+			printf("simd=%s n=%d used=no\n", names[l], n);
 			plait_destroy_world(world);
 			continue;
 		}
-#if PLAIT_X86_KERNELS
 		if (on_columns) {
-			plait_points_to_columns_avx512(p->point, &columns, 0, p->count);
+			sim->column_ops.to_columns(p->point, &columns, 0, p->count);
 		}
-#endif
 		long projections = 0;
 		double start = now_seconds();
 		for (int s = 0; s < sweeps; ++s) {
@@ -117,11 +116,9 @@ int main(int argc, char **argv)
 			}
 		}
 		double seconds = now_seconds() - start;
-#if PLAIT_X86_KERNELS
 		if (on_columns) {
-			plait_points_from_columns_avx512(p->point, &columns, 0, p->count);
+			sim->column_ops.from_columns(p->point, &columns, 0, p->count);
 		}
-#endif
 		bool identical = true;
 		if (reference == NULL) {
 			particle_count = p->count;

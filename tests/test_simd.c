@@ -77,18 +77,14 @@ static void free_block(plait_distance_block *block)
 typedef void block_maker(plait_distance_block *block, plait_point *points, int count, uint32_t seed,
                          bool rigid);
 
-/* The column kernel's sweep of [begin, end) (AVX-512 only), cut into ranges of `cut`
- * constraints: most cuts fall inside segments, which a range of a parallel loop may do. */
+/* A column kernel's sweep of [begin, end), cut into ranges of `cut` constraints: most cuts
+ * fall inside segments, which a range of a parallel loop may do. */
 static void sweep_columns(plait_distance_block *block, const plait_columns *columns, int begin, int end,
                           int cut)
 {
-#if PLAIT_X86_KERNELS
 	for (int c = begin; c < end; c += cut) {
-		plait_project_distance_columns_avx512(block, columns, c, c + cut < end ? c + cut : end, 3600.0f);
+		columns->project(block, columns, c, c + cut < end ? c + cut : end, 3600.0f);
 	}
-#else
-	(void)block, (void)columns, (void)begin, (void)end, (void)cut;
-#endif
 }
 
 /* A block of count constraints over point_count points from `make`, swept five times by every
@@ -101,6 +97,8 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 {
 	plait_point *reference = malloc(sizeof *reference * (size_t)point_count);
 	float *reference_lambda = malloc(sizeof(float) * (size_t)count);
+	/* Passes 0-5: each level, without and with kept layouts; 6-7: the column kernel, cut every 16
+	 * and every 7. */
 	for (int pass = 0; pass < 2 * 3 + 2; ++pass) {
 		int l = pass < 6 ? pass / 2 : 2;
 		bool keep_layouts = pass % 2 == 1, columns = pass >= 6;
@@ -127,19 +125,19 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 			block.colouring.segments = segments;
 		}
 		if (columns) {
-#if PLAIT_X86_KERNELS
+			plait_column_ops ops = plait_column_ops_for(levels[l]);
+			cr_assert(ops.project != NULL && ops.to_columns != NULL && ops.from_columns != NULL);
 			float *column = aligned_alloc(64, (sizeof(float) * 4 * (size_t)point_count + 63) / 64 * 64);
 			plait_columns as_columns = {column, column + point_count, column + 2 * point_count,
-			                            column + 3 * point_count};
-			plait_points_to_columns_avx512(points, &as_columns, 0, point_count);
+			                            column + 3 * point_count, ops.project};
+			ops.to_columns(points, &as_columns, 0, point_count);
 			memset(points, 0xff, sizeof *points * (size_t)point_count); /* all back from the columns */
 			for (int sweep = 0; sweep < 5; ++sweep) {
-				sweep_columns(&block, &as_columns, 0, split, pass == 6 ? 16 : 7);
-				sweep_columns(&block, &as_columns, split, count, pass == 6 ? 16 : 7);
+				sweep_columns(&block, &as_columns, 0, split, pass % 2 == 0 ? 16 : 7);
+				sweep_columns(&block, &as_columns, split, count, pass % 2 == 0 ? 16 : 7);
 			}
-			plait_points_from_columns_avx512(points, &as_columns, 0, point_count);
+			ops.from_columns(points, &as_columns, 0, point_count);
 			free(column);
-#endif
 		} else {
 			plait_distance_kernel *kernel = plait_distance_kernel_for(levels[l]);
 			for (int sweep = 0; sweep < 5; ++sweep) {

@@ -177,12 +177,12 @@ enum { DISTANCE_BLOCKS = 3, BLOCKS = DISTANCE_BLOCKS + 1 };
  * and room for the columns. A segment costs the column kernel about what a whole batch of 16
  * costs the point kernel, and a segment of one (a constraint in no layout) about twice a
  * gathered batch's share, so columns pay when segments hold 8 constraints or more on average:
- * a grid cloth's hold about 14, a scanned mesh's nearer one. The column kernel exists for
+ * a grid cloth's hold about 14, a scanned mesh's nearer one. There is a column kernel for
  * AVX-512 only. Without the memory they are not used: that only costs speed. */
 static void choose_columns(plait_sim *sim, int segment_count)
 {
 	int constraints = sim->stretch.count + sim->shear.count + sim->bend_distance.count;
-	sim->use_columns = PLAIT_X86_KERNELS && sim->simd == PLAIT_SIMD_AVX512 && constraints > 0 &&
+	sim->use_columns = sim->column_ops.project != NULL && constraints > 0 &&
 	                   (int64_t)segment_count * 8 <= (int64_t)constraints;
 	int needed = sim->particles.capacity;
 	if (!sim->use_columns || sim->columns_capacity >= needed) {

@@ -24,12 +24,10 @@ typedef struct distance_job {
 static void distance_range(void *context, int begin, int end)
 {
 	distance_job *job = context;
-#if PLAIT_X86_KERNELS
 	if (job->columns != NULL) {
-		plait_project_distance_columns_avx512(job->block, job->columns, begin, end, job->inverse_h_squared);
+		job->columns->project(job->block, job->columns, begin, end, job->inverse_h_squared);
 		return;
 	}
-#endif
 	job->kernel(job->block, job->points, begin, end, job->inverse_h_squared);
 }
 

@@ -26,6 +26,7 @@
 
 #include "dynamics/batch_layout.h"
 #include "dynamics/colouring.h"
+#include "dynamics/distance_columns.h"
 #include "dynamics/points_avx512.h"
 
 /* Swaps inside each 128-bit block: neighbours (PAIRS, SHEAR) and halves (SKIP). */
@@ -38,11 +39,6 @@
 /* Back: the lane (of two vectors, the second from 16) holding each constraint's first end. */
 #define PAIRS_FIRSTS _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30)
 #define SKIP_FIRSTS _mm512_setr_epi32(0, 1, 4, 5, 8, 9, 12, 13, 16, 17, 20, 21, 24, 25, 28, 29)
-
-static inline uint32_t index_of(uint32_t offset)
-{
-	return offset / (uint32_t)sizeof(plait_point);
-}
 
 /* A constraint's values (rest length, compliances, multiplier) for the lanes of a vector. */
 typedef struct lane_values {
@@ -238,61 +234,6 @@ project_one_row(plait_distance_block *block, const plait_columns *columns, const
 		_mm512_mask_storeu_ps(block->lambda + c, constraints,
 		                      _mm512_permutex2var_ps(lambda[0], firsts, second));
 	}
-}
-
-/* One constraint, as distance_scalar.c. */
-static inline __attribute__((always_inline)) void project_alone(plait_distance_block *block,
-                                                                const plait_columns *columns, int c,
-                                                                uint32_t i, uint32_t j,
-                                                                float inverse_h_squared, bool rigid)
-{
-	float *x = columns->x, *y = columns->y, *z = columns->z;
-	float wi = columns->w[i], wj = columns->w[j];
-	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
-	float length_sq = dx * dx + dy * dy + dz * dz;
-	float w_sum = wi + wj;
-	float s;
-	if (rigid) {
-		float rest_sq = block->rest[c] * block->rest[c];
-		float sum_sq = length_sq + rest_sq;
-		sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
-		float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
-		s = w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
-	} else {
-		float length = sqrtf(length_sq);
-		length = length > 1e-12f ? length : 1e-12f;
-		float C = length - block->rest[c];
-		float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
-		bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
-		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
-		float denominator = (w_sum + alpha_tilde) * length;
-		denominator = w_sum > 0.0f ? denominator : 1.0f;
-		s = (-C - alpha_tilde * block->lambda[c]) / denominator;
-		s = active ? s : 0.0f;
-		block->lambda[c] = block->lambda[c] + s * length;
-	}
-	float si = wi * s, sj = wj * s;
-	x[i] = x[i] - si * dx;
-	y[i] = y[i] - si * dy;
-	z[i] = z[i] - si * dz;
-	x[j] = x[j] + sj * dx;
-	y[j] = y[j] + sj * dy;
-	z[j] = z[j] + sj * dz;
-}
-
-/* The last segment starting at or before constraint c (the block has segments, c coloured). */
-static int segment_at(const plait_colouring *colouring, int c)
-{
-	int low = 0, high = colouring->segment_count - 1;
-	while (low < high) {
-		int middle = (low + high + 1) / 2;
-		if (colouring->segments[middle].start <= c) {
-			low = middle;
-		} else {
-			high = middle - 1;
-		}
-	}
-	return low;
 }
 
 static inline __attribute__((always_inline)) void project_columns(plait_distance_block *block,

@@ -32,21 +32,17 @@ plait_distance_kernel plait_project_distance_avx2;
 plait_distance_kernel plait_project_distance_avx512;
 #endif
 
-/* The points as columns (plait_sim.column_x and the rest), for the column kernel. */
-typedef struct plait_columns {
-	float *x, *y, *z, *w;
-} plait_columns;
-
+/* The column kernel (distance_columns_avx512.c): constraints [begin, end) of a block by its
+ * segments (batch_layout.h), on the points as columns, the same bits as the point kernels; and
+ * the copies of points [begin, end) into columns and back. */
 #if PLAIT_X86_KERNELS
-/* The AVX-512 kernel on columns (distance_columns_avx512.c): constraints [begin, end) by the
- * block's segments (batch_layout.h), the same bits as the others. */
-void plait_project_distance_columns_avx512(plait_distance_block *block, const plait_columns *columns,
-                                           int begin, int end, float inverse_h_squared);
-/* Points [begin, end) into the columns, and back. */
+plait_column_kernel plait_project_distance_columns_avx512;
 void plait_points_to_columns_avx512(const plait_point *points, const plait_columns *columns, int begin,
                                     int end);
 void plait_points_from_columns_avx512(plait_point *points, const plait_columns *columns, int begin, int end);
 #endif
+/* The column kernel and copies of a level (all NULL where there is none: AVX-512 only). */
+plait_column_ops plait_column_ops_for(plait_simd level);
 
 /* Whether this processor can run a level (PLAIT_SIMD_AUTO: always). */
 bool plait_simd_supported(plait_simd level);

@@ -109,3 +109,21 @@ plait_distance_kernel *plait_distance_kernel_for(plait_simd level)
 		return plait_project_distance_scalar;
 	}
 }
+
+plait_column_ops plait_column_ops_for(plait_simd level)
+{
+	plait_column_ops ops = {NULL, NULL, NULL};
+	switch (level) {
+#if PLAIT_X86_KERNELS
+	/* None for AVX2: an eight-lane column kernel was slower here than the AVX2 point kernel
+	 * (docs/performance.md, session 18). */
+	case PLAIT_SIMD_AVX512:
+		ops = (plait_column_ops){plait_project_distance_columns_avx512, plait_points_to_columns_avx512,
+		                         plait_points_from_columns_avx512};
+		break;
+#endif
+	default:
+		break;
+	}
+	return ops;
+}

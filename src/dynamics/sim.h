@@ -136,6 +136,24 @@ typedef struct plait_colouring {
 	int segment_count;
 } plait_colouring;
 
+/* The points as columns (plait_sim.column_x and the rest), for the column kernels
+ * (distance_kernel.h), and the kernel that projects on them. */
+struct plait_distance_block;
+typedef struct plait_columns plait_columns;
+typedef void plait_column_kernel(struct plait_distance_block *block, const plait_columns *columns, int begin,
+                                 int end, float inverse_h_squared);
+struct plait_columns {
+	float *x, *y, *z, *w;
+	plait_column_kernel *project;
+};
+
+/* A level's column kernel and its copies of the points into columns and back (NULL: none). */
+typedef struct plait_column_ops {
+	plait_column_kernel *project;
+	void (*to_columns)(const plait_point *points, const plait_columns *columns, int begin, int end);
+	void (*from_columns)(plait_point *points, const plait_columns *columns, int begin, int end);
+} plait_column_ops;
+
 /* Distance constraints |x_j - x_i| = rest (stretch, compression and shear). Compliance per
  * direction: when longer than rest, compliance_tension; when shorter, compliance_compression;
  * a negative compliance (PLAIT_NO_RESISTANCE) means no resistance that way. */
@@ -334,6 +352,7 @@ typedef struct plait_sim {
 	 * one allocation. in_columns: they hold the current points and the point array is stale. */
 	float *column_x, *column_y, *column_z, *column_w;
 	int columns_capacity;
+	plait_column_ops column_ops; /* of the chosen instruction set */
 	bool use_columns, in_columns;
 
 	float largest_radius; /* of any particle, scene units; measured at the start of each step */

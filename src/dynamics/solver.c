@@ -210,35 +210,34 @@ static bool closes_foldably(const plait_sim *sim, const int *in_substep, int fir
 /* Columns. Where every distance block lies in segments of the column layouts (colouring.c,
  * choose_columns), the points are copied into columns (x, y, z, w arrays) before the first
  * distance event of a substep and back before anything else reads them: the column kernel
- * (distance_columns_avx512.c) projects about three times as fast as the point kernel, and the
- * two copies cost about a tenth of that. Everything else keeps the point array. The copies are
- * exact and the column kernel gives the point kernel's bits, so results do not change. */
+ * (distance_columns_avx512.c) projects about 1.6 times as fast as the point kernel (hang-128),
+ * and the two copies cost a small part of what that saves. Everything else keeps the point
+ * array. The copies are exact and the column kernel gives the point kernel's bits, so results
+ * do not change. */
 static plait_columns columns_of(const plait_sim *sim)
 {
-	return (plait_columns){sim->column_x, sim->column_y, sim->column_z, sim->column_w};
+	return (plait_columns){sim->column_x, sim->column_y, sim->column_z, sim->column_w,
+	                       sim->column_ops.project};
 }
 
-#if PLAIT_X86_KERNELS
 static void to_columns_range(void *context, int begin, int end)
 {
 	plait_sim *sim = context;
 	plait_columns columns = columns_of(sim);
-	plait_points_to_columns_avx512(sim->particles.point, &columns, begin, end);
+	sim->column_ops.to_columns(sim->particles.point, &columns, begin, end);
 }
 
 static void from_columns_range(void *context, int begin, int end)
 {
 	plait_sim *sim = context;
 	plait_columns columns = columns_of(sim);
-	plait_points_from_columns_avx512(sim->particles.point, &columns, begin, end);
+	sim->column_ops.from_columns(sim->particles.point, &columns, begin, end);
 }
-#endif
 
 /* The columns to project on (into *columns), copied there if they are not yet; NULL: the
  * point array. */
 static const plait_columns *enter_columns(plait_sim *sim, plait_columns *columns)
 {
-#if PLAIT_X86_KERNELS
 	if (!sim->use_columns || sim->columns_capacity < sim->particles.count) {
 		return NULL;
 	}
@@ -248,24 +247,15 @@ static const plait_columns *enter_columns(plait_sim *sim, plait_columns *columns
 	}
 	*columns = columns_of(sim);
 	return columns;
-#else
-	(void)sim;
-	(void)columns;
-	return NULL;
-#endif
 }
 
 /* The points back in the point array. */
 static void leave_columns(plait_sim *sim)
 {
-#if PLAIT_X86_KERNELS
 	if (sim->in_columns) {
 		plait_parallel_for(&sim->parallel, from_columns_range, sim, 0, sim->particles.count, PARTICLE_GRAIN);
 		sim->in_columns = false;
 	}
-#else
-	(void)sim;
-#endif
 }
 
 static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, plait_sweep sweep)

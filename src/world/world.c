@@ -145,6 +145,7 @@ plait_world_id plait_create_world(const plait_world_def *def, plait_error *error
 	plait_sim_init(&world->sim, &allocator);
 	world->sim.simd = def->simd == PLAIT_SIMD_AUTO ? plait_simd_best() : def->simd;
 	world->sim.distance_kernel = plait_distance_kernel_for(world->sim.simd);
+	world->sim.column_ops = plait_column_ops_for(world->sim.simd);
 	world->sim.bend_kernel = plait_bend_kernel_for(world->sim.simd);
 	plait_parallel_init(&world->sim.parallel, def->enqueue_task, def->finish_task, def->task_context,
 	                    def->worker_count);

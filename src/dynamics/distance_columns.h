@@ -1,0 +1,74 @@
+/* Plain C pieces of the column kernel (distance_columns_avx512.c), kept apart from its vector
+ * code: a constraint projected alone on columns, with the portable kernel's arithmetic, and
+ * finding the segment a range starts in. */
+#ifndef PLAIT_DYNAMICS_DISTANCE_COLUMNS_H
+#define PLAIT_DYNAMICS_DISTANCE_COLUMNS_H
+
+#include <math.h>
+#include <stdbool.h>
+
+#include "dynamics/batch_layout.h"
+#include "dynamics/distance_kernel.h"
+
+/* The point index of a byte offset (plait_point_offset). */
+static inline uint32_t index_of(uint32_t offset)
+{
+	return offset / (uint32_t)sizeof(plait_point);
+}
+
+/* One constraint, as distance_scalar.c. */
+static inline __attribute__((always_inline)) void project_alone(plait_distance_block *block,
+                                                                const plait_columns *columns, int c,
+                                                                uint32_t i, uint32_t j,
+                                                                float inverse_h_squared, bool rigid)
+{
+	float *x = columns->x, *y = columns->y, *z = columns->z;
+	float wi = columns->w[i], wj = columns->w[j];
+	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
+	float length_sq = dx * dx + dy * dy + dz * dz;
+	float w_sum = wi + wj;
+	float s;
+	if (rigid) {
+		float rest_sq = block->rest[c] * block->rest[c];
+		float sum_sq = length_sq + rest_sq;
+		sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
+		float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
+		s = w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
+	} else {
+		float length = sqrtf(length_sq);
+		length = length > 1e-12f ? length : 1e-12f;
+		float C = length - block->rest[c];
+		float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
+		bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
+		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
+		float denominator = (w_sum + alpha_tilde) * length;
+		denominator = w_sum > 0.0f ? denominator : 1.0f;
+		s = (-C - alpha_tilde * block->lambda[c]) / denominator;
+		s = active ? s : 0.0f;
+		block->lambda[c] = block->lambda[c] + s * length;
+	}
+	float si = wi * s, sj = wj * s;
+	x[i] = x[i] - si * dx;
+	y[i] = y[i] - si * dy;
+	z[i] = z[i] - si * dz;
+	x[j] = x[j] + sj * dx;
+	y[j] = y[j] + sj * dy;
+	z[j] = z[j] + sj * dz;
+}
+
+/* The last segment starting at or before constraint c (the block has segments, c coloured). */
+static inline int segment_at(const plait_colouring *colouring, int c)
+{
+	int low = 0, high = colouring->segment_count - 1;
+	while (low < high) {
+		int middle = (low + high + 1) / 2;
+		if (colouring->segments[middle].start <= c) {
+			low = middle;
+		} else {
+			high = middle - 1;
+		}
+	}
+	return low;
+}
+
+#endif
