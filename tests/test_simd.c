@@ -285,6 +285,42 @@ Test(simd, batches_in_runs_of_points_give_the_bits_of_the_portable_kernel)
 	}
 }
 
+/* make_layout_block's batches with every third constraint turned the other way round (its
+ * points swapped: segments still find it, the point kernels then gather its batch), and points
+ * at -0 at both ends of some constraints, each in one coordinate: there d is +0 from either end,
+ * and a kernel that negated d for the second end instead of working it as the portable kernel
+ * does would turn -0 into +0 where that one keeps it, or the other way. */
+static void make_turned_layout_block(plait_distance_block *block, plait_point *points, int count,
+                                     uint32_t seed, bool rigid)
+{
+	make_layout_block(block, points, count, seed, rigid);
+	for (int c = FILLERS; c < count; ++c) {
+		int k = (c - FILLERS) % 16, i = block->pair[c][0], j = block->pair[c][1];
+		if (k == 5 || k == 10) {
+			points[i].x.x = points[j].x.x = -0.0f;
+		} else if (k == 6 || k == 13) {
+			points[i].x.y = points[j].x.y = -0.0f;
+		}
+		if (c % 3 == 1) {
+			block->pair[c][0] = j;
+			block->pair[c][1] = i;
+			uint32_t first = block->point_offset[c][0];
+			block->point_offset[c][0] = block->point_offset[c][1];
+			block->point_offset[c][1] = first;
+		}
+	}
+}
+
+Test(simd, constraints_either_way_round_and_points_at_minus_zero_give_the_bits_of_the_portable_kernel)
+{
+	int counts[] = {FILLERS + 16 * LAYOUT_KINDS, FILLERS + 16 * 2 * LAYOUT_KINDS + 7};
+	for (size_t n = 0; n < 2 * sizeof counts / sizeof counts[0]; ++n) {
+		int count = counts[n / 2];
+		check_kernels(make_turned_layout_block, count, layout_point_count(count), FILLERS,
+		              4242u + (uint32_t)count, n % 2 == 1);
+	}
+}
+
 /* The layouts found for make_layout_block's batches are the ones it laid out: whole for 16
  * lanes, and for each half of 8 (the moved lane spoils only its own half). */
 Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)

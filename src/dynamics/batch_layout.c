@@ -43,9 +43,10 @@ void plait_find_batch_layouts(const plait_distance_block *block, unsigned char *
 	}
 }
 
-/* Whether constraint pair (p, q) joins e0 and e1, either way round: a projection is the same
- * both ways, bit for bit (swapping the ends negates d exactly), so a segment's constraints may
- * be stored either way; only its base points are read from its first constraint. */
+/* Whether constraint pair (p, q) joins e0 and e1, either way round: a projection moves each end
+ * by its own difference to the other (distance_kernel.h), the same bits whichever end is first,
+ * so a segment's constraints may be stored either way; only its base points are read from its
+ * first constraint. */
 static inline bool joins(const uint32_t *pair, uint32_t e0, uint32_t e1)
 {
 	return (pair[0] == e0 && pair[1] == e1) || (pair[0] == e1 && pair[1] == e0);

@@ -204,13 +204,15 @@ static inline __attribute__((always_inline)) void project8(plait_distance_block 
 		store_values(block->lambda + c, layout, lanes, count,
 		             _mm256_add_ps(lambda, _mm256_mul_ps(s, length)));
 	}
+	/* Each end by its own difference to the other (distance_kernel.h). */
 	__m256 si = _mm256_mul_ps(wi, s), sj = _mm256_mul_ps(wj, s);
+	__m256 ex = _mm256_sub_ps(xi, xj), ey = _mm256_sub_ps(yi, yj), ez = _mm256_sub_ps(zi, zj);
 	xi = _mm256_sub_ps(xi, _mm256_mul_ps(si, dx));
 	yi = _mm256_sub_ps(yi, _mm256_mul_ps(si, dy));
 	zi = _mm256_sub_ps(zi, _mm256_mul_ps(si, dz));
-	xj = _mm256_add_ps(xj, _mm256_mul_ps(sj, dx));
-	yj = _mm256_add_ps(yj, _mm256_mul_ps(sj, dy));
-	zj = _mm256_add_ps(zj, _mm256_mul_ps(sj, dz));
+	xj = _mm256_sub_ps(xj, _mm256_mul_ps(sj, ex));
+	yj = _mm256_sub_ps(yj, _mm256_mul_ps(sj, ey));
+	zj = _mm256_sub_ps(zj, _mm256_mul_ps(sj, ez));
 	if (layout != PLAIT_LAYOUT_GATHER) {
 		__m256 ri[4], rj[4];
 		untranspose_halves(xi, yi, zi, wi, ri);

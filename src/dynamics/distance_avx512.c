@@ -260,13 +260,15 @@ static inline __attribute__((always_inline)) void project16(plait_distance_block
 		store_values(block->lambda + c, layout, update, _mm512_add_ps(lambda, _mm512_mul_ps(s, length)));
 	}
 	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
-	/* Skipped lanes keep their loaded bits (x - 0 d would turn a -0 into +0). */
+	/* Each end by its own difference to the other (distance_kernel.h). Skipped lanes keep their
+	 * loaded bits (x - 0 d would turn a -0 into +0). */
+	__m512 ex = _mm512_sub_ps(xi, xj), ey = _mm512_sub_ps(yi, yj), ez = _mm512_sub_ps(zi, zj);
 	xi = _mm512_mask_sub_ps(xi, update, xi, _mm512_mul_ps(si, dx));
 	yi = _mm512_mask_sub_ps(yi, update, yi, _mm512_mul_ps(si, dy));
 	zi = _mm512_mask_sub_ps(zi, update, zi, _mm512_mul_ps(si, dz));
-	xj = _mm512_mask_add_ps(xj, update, xj, _mm512_mul_ps(sj, dx));
-	yj = _mm512_mask_add_ps(yj, update, yj, _mm512_mul_ps(sj, dy));
-	zj = _mm512_mask_add_ps(zj, update, zj, _mm512_mul_ps(sj, dz));
+	xj = _mm512_mask_sub_ps(xj, update, xj, _mm512_mul_ps(sj, ex));
+	yj = _mm512_mask_sub_ps(yj, update, yj, _mm512_mul_ps(sj, ey));
+	zj = _mm512_mask_sub_ps(zj, update, zj, _mm512_mul_ps(sj, ez));
 	if (layout != PLAIT_LAYOUT_GATHER) {
 		__m512 ri[4], rj[4];
 		untranspose_points16(xi, yi, zi, wi, ri);

@@ -48,12 +48,13 @@ static inline __attribute__((always_inline)) void project_alone(plait_distance_b
 		block->lambda[c] = block->lambda[c] + s * length;
 	}
 	float si = wi * s, sj = wj * s;
+	float ex = x[i] - x[j], ey = y[i] - y[j], ez = z[i] - z[j];
 	x[i] = x[i] - si * dx;
 	y[i] = y[i] - si * dy;
 	z[i] = z[i] - si * dz;
-	x[j] = x[j] + sj * dx;
-	y[j] = y[j] + sj * dy;
-	z[j] = z[j] + sj * dz;
+	x[j] = x[j] - sj * ex;
+	y[j] = y[j] - sj * ey;
+	z[j] = z[j] - sj * ez;
 }
 
 /* The last segment starting at or before constraint c (the block has segments, c coloured). */

@@ -12,10 +12,11 @@
  *
  * The lanes of a PAIRS or SKIP segment hold points, not constraints: both ends of each
  * constraint, each with the other's coordinates beside it (a swap inside each 128-bit block),
- * so both compute the constraint, one with d negated. Since -(a - b) = b - a, (-d)^2 = d^2,
- * w_i + w_j = w_j + w_i and x - w s (-d) = x + w s d exactly, each end moves by the bits the
- * portable kernel gives it; so does a SHEAR segment's second constraint of each pair, whose
- * ends swap sides. Every value is the portable kernel's (distance_scalar.c), operation for
+ * so both compute the constraint, each moving by its own difference to the other, as every
+ * kernel moves each end (distance_kernel.h): x -= w s (x_other - x). That is symmetric in the two
+ * ends, so a SHEAR segment's second constraint of each pair, whose ends swap rows, and a
+ * constraint stored the other way round need nothing of their own, and d^2 and w_i + w_j are the
+ * same bits from either end. Every value is the portable kernel's, operation for
  * operation. Compiled with -mavx512f (never with FMA contraction); only called when the
  * processor has AVX-512F. */
 #include "dynamics/distance_kernel.h"
@@ -142,13 +143,16 @@ static inline __attribute__((always_inline)) void project_two_rows(plait_distanc
 		_mm512_mask_storeu_ps(block->lambda + c, constraints,
 		                      _mm512_add_ps(v.lambda, _mm512_mul_ps(s, parts.length)));
 	}
+	/* Each end moves by its own difference to the other (distance_kernel.h), so which row holds
+	 * a constraint's first end does not matter. */
 	__m512 si = _mm512_mul_ps(wi, s), sj = _mm512_mul_ps(wj, s);
+	__m512 ex = _mm512_sub_ps(xi, xj), ey = _mm512_sub_ps(yi, yj), ez = _mm512_sub_ps(zi, zj);
 	_mm512_mask_storeu_ps(columns->x + a, constraints, _mm512_sub_ps(xi, _mm512_mul_ps(si, dx)));
 	_mm512_mask_storeu_ps(columns->y + a, constraints, _mm512_sub_ps(yi, _mm512_mul_ps(si, dy)));
 	_mm512_mask_storeu_ps(columns->z + a, constraints, _mm512_sub_ps(zi, _mm512_mul_ps(si, dz)));
-	xj = _mm512_add_ps(xj, _mm512_mul_ps(sj, dx));
-	yj = _mm512_add_ps(yj, _mm512_mul_ps(sj, dy));
-	zj = _mm512_add_ps(zj, _mm512_mul_ps(sj, dz));
+	xj = _mm512_sub_ps(xj, _mm512_mul_ps(sj, ex));
+	yj = _mm512_sub_ps(yj, _mm512_mul_ps(sj, ey));
+	zj = _mm512_sub_ps(zj, _mm512_mul_ps(sj, ez));
 	if (shear) {
 		xj = _mm512_permute_ps(xj, SWAP_NEIGHBOURS);
 		yj = _mm512_permute_ps(yj, SWAP_NEIGHBOURS);
@@ -206,7 +210,7 @@ project_one_row(plait_distance_block *block, const plait_columns *columns, const
 		}
 		spread[g] = _mm512_add_epi32(skip ? SKIP_LANES : PAIRS_LANES, _mm512_set1_epi32(8 * g));
 		lane_values v = load_lane_values(block, c, constraints, rigid, true, spread[g]);
-		lambda[g] = v.lambda;
+		lambda[g] = rigid ? _mm512_setzero_ps() : v.lambda; /* (unused when rigid) */
 		dx[g] = _mm512_sub_ps(qx, px[g]);
 		dy[g] = _mm512_sub_ps(qy, py[g]);
 		dz[g] = _mm512_sub_ps(qz, pz[g]);

@@ -8,7 +8,10 @@
  * One projection, with d = x_j - x_i, L = |d|, C = L - rest, alpha the compliance of the
  * direction C points to (negative: no resistance that way), alpha~ = alpha / h^2:
  *     s = (-C - alpha~ lambda) / ((w_i + w_j + alpha~) L),   lambda += s L,
- *     x_i -= w_i s d,   x_j += w_j s d.
+ *     x_i -= w_i s (x_j - x_i),   x_j -= w_j s (x_i - x_j).
+ * Each end moves by its own difference to the other rather than x_j += w_j s d: the same value,
+ * but symmetric in the two ends to the bit (with d = +0, -d would be -0), so the kernels may
+ * work a constraint from either end (the column kernel's lanes do).
  *
  * A rigid block (no compliance anywhere) takes a step without a square root:
  *     s = (rest^2 - L^2) / ((w_i + w_j) (L^2 + rest^2)),

@@ -40,13 +40,15 @@ static inline __attribute__((always_inline)) void project_range(plait_distance_b
 			s = active ? s : 0.0f;
 			lambda[c] = lambda[c] + s * length;
 		}
+		/* Each end by its own difference to the other (distance_kernel.h). */
 		float si = wi * s, sj = wj * s;
+		float ex = pi->x.x - pj->x.x, ey = pi->x.y - pj->x.y, ez = pi->x.z - pj->x.z;
 		pi->x.x = pi->x.x - si * dx;
 		pi->x.y = pi->x.y - si * dy;
 		pi->x.z = pi->x.z - si * dz;
-		pj->x.x = pj->x.x + sj * dx;
-		pj->x.y = pj->x.y + sj * dy;
-		pj->x.z = pj->x.z + sj * dz;
+		pj->x.x = pj->x.x - sj * ex;
+		pj->x.y = pj->x.y - sj * ey;
+		pj->x.z = pj->x.z - sj * ez;
 	}
 }
 

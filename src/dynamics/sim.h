@@ -347,9 +347,9 @@ typedef struct plait_sim {
 	void (*bend_kernel)(struct plait_bend_block *block, plait_point *points, int begin, int end,
 	                    float inverse_h_squared);
 	plait_parallel parallel;
-	/* The points as columns while the distance blocks are projected, when every block lies in
-	 * segments (solver.c, "Columns"): x, y, z and w arrays of columns_capacity floats each,
-	 * one allocation. in_columns: they hold the current points and the point array is stale. */
+	/* The points as columns while the distance blocks are projected, when the blocks' segments
+	 * hold 8 constraints or more on average (solver.c, "Columns"): x, y, z and w arrays of columns_capacity
+	 * floats each, one allocation. in_columns: they hold the current points and the point array is stale. */
 	float *column_x, *column_y, *column_z, *column_w;
 	int columns_capacity;
 	plait_column_ops column_ops; /* of the chosen instruction set */

@@ -282,7 +282,9 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 			plait_solve_bend(&sim->bend, &sim->particles, inverse_h_squared, sim->bend_kernel,
 			                 &sim->parallel);
 		}
-		columns = enter_columns(sim, &storage);
+		/* (Not into columns for no distance constraint: a dihedral bend's event would copy the
+		 * points there and straight back.) */
+		columns = sim->bend_distance.count > 0 ? enter_columns(sim, &storage) : NULL;
 		plait_solve_distance(&sim->bend_distance, &sim->particles, columns, inverse_h_squared, sweep,
 		                     sim->distance_kernel, &sim->parallel);
 		if (sim->rod_bend.count > 0) {
