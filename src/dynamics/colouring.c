@@ -174,18 +174,25 @@ static void permute(char *scratch, void *data, size_t size, int count, const int
 enum { DISTANCE_BLOCKS = 3, BLOCKS = DISTANCE_BLOCKS + 1 };
 
 /* Whether the distance blocks are projected on the points as columns (solver.c, "Columns"),
- * and room for the columns. A segment costs the column kernel about what a whole batch of 16
- * costs the point kernel, and a segment of one (a constraint in no layout) about twice a
- * gathered batch's share, so columns pay when segments hold 8 constraints or more on average:
- * a grid cloth's hold about 14, a scanned mesh's nearer one. There is a column kernel for
- * AVX-512 only. Without the memory they are not used: that only costs speed. */
+ * and room for the columns (freed when they are not used). Columns pay when segments hold 8
+ * constraints or more on average: `bench_kernels N` with columns forced, ns a projection against
+ * the AVX-512 point kernel's, gave 2.31 against 1.94 for a 32 x 32 grid, 1.94 against 1.99 at
+ * 40 x 40 (segments of about 6.5), 1.79 against 1.94 at 48 x 48 and 1.45 against 1.90 at 64 x 64
+ * (9.2); a scanned mesh's segments hold nearer one. There is a column kernel for AVX-512 only.
+ * Without the memory they are not used: that only costs speed. */
 static void choose_columns(plait_sim *sim, int segment_count)
 {
 	int constraints = sim->stretch.count + sim->shear.count + sim->bend_distance.count;
 	sim->use_columns = sim->column_ops.project != NULL && constraints > 0 &&
 	                   (int64_t)segment_count * 8 <= (int64_t)constraints;
+	if (!sim->use_columns) {
+		plait_free(&sim->allocator, sim->column_x);
+		sim->column_x = sim->column_y = sim->column_z = sim->column_w = NULL;
+		sim->columns_capacity = 0;
+		return;
+	}
 	int needed = sim->particles.capacity;
-	if (!sim->use_columns || sim->columns_capacity >= needed) {
+	if (sim->columns_capacity >= needed) {
 		return;
 	}
 	/* Four columns, each padded to whole cache lines. */
