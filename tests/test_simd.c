@@ -665,6 +665,25 @@ Test(simd, runs_and_regions_share_no_particle)
 	check_grid_colouring(200);
 }
 
+/* A rope of ROPE_VERTICES beside the scenes' cloths, pinned at one end, bent (rod_bend). */
+enum { ROPE_VERTICES = 24 };
+
+static plait_object_id add_rope(plait_world_id world)
+{
+	plait_vec3 rope[ROPE_VERTICES];
+	for (int i = 0; i < ROPE_VERTICES; ++i) {
+		rope[i] = (plait_vec3){2.5f + 0.05f * (float)i, 0.5f, 0.0f};
+	}
+	plait_curve_def def = plait_default_curve_def();
+	def.positions = rope;
+	def.vertex_count = ROPE_VERTICES;
+	def.bend_resistance = 5.0f;
+	int pin = 0;
+	def.pins = &pin;
+	def.pin_count = 1;
+	return plait_create_curve(world, &def, NULL);
+}
+
 /* Two cloths with everything on (tethers, bend as distances and as dihedral angles,
  * self-collision, a collider), stepped
  * with each instruction set: identical positions, byte for byte. */
@@ -740,18 +759,7 @@ static void run_instruction_set_scene(bool air, bool shared_damping)
 		sphere.surface.stickiness = 0.3f;
 		plait_create_collider(world, &sphere, NULL);
 		/* A rope beside them, pinned at one end (a curve's bend, rod_bend). */
-		plait_vec3 rope[24];
-		for (int i = 0; i < 24; ++i) {
-			rope[i] = (plait_vec3){2.5f + 0.05f * (float)i, 0.5f, 0.0f};
-		}
-		plait_curve_def rope_def = plait_default_curve_def();
-		rope_def.positions = rope;
-		rope_def.vertex_count = 24;
-		rope_def.bend_resistance = 5.0f;
-		int rope_pin = 0;
-		rope_def.pins = &rope_pin;
-		rope_def.pin_count = 1;
-		cr_assert(!plait_object_id_is_null(plait_create_curve(world, &rope_def, NULL)));
+		cr_assert(!plait_object_id_is_null(add_rope(world)));
 		cr_assert(test_step_frames(world, 20));
 		plait_destroy_object(doomed);
 		cr_assert(test_step_frames(world, 20));
@@ -795,7 +803,7 @@ Test(simd, materials_damping_apart_give_the_same_bytes_with_every_instruction_se
 Test(simd, a_cloth_projected_on_columns_gives_the_same_bytes_with_every_instruction_set)
 {
 	test_grid grid = test_grid_make(64, 64, 2.0f, 2.0f);
-	int count = grid.vertex_count + 24;
+	int count = grid.vertex_count + ROPE_VERTICES;
 	plait_vec3 *reference = malloc(sizeof *reference * (size_t)count);
 	plait_vec3 *positions = malloc(sizeof *positions * (size_t)count);
 	bool compared = false;
@@ -819,18 +827,7 @@ Test(simd, a_cloth_projected_on_columns_gives_the_same_bytes_with_every_instruct
 		def.pin_count = 2;
 		plait_object_id cloth = plait_create_cloth(world, &def, NULL);
 		cr_assert(!plait_object_id_is_null(cloth));
-		plait_vec3 rope[24];
-		for (int i = 0; i < 24; ++i) {
-			rope[i] = (plait_vec3){2.5f + 0.05f * (float)i, 0.5f, 0.0f};
-		}
-		plait_curve_def rope_def = plait_default_curve_def();
-		rope_def.positions = rope;
-		rope_def.vertex_count = 24;
-		rope_def.bend_resistance = 5.0f;
-		int rope_pin = 0;
-		rope_def.pins = &rope_pin;
-		rope_def.pin_count = 1;
-		plait_object_id curve = plait_create_curve(world, &rope_def, NULL);
+		plait_object_id curve = add_rope(world);
 		cr_assert(!plait_object_id_is_null(curve));
 		plait_collider_def sphere = plait_default_collider_def();
 		sphere.shape = PLAIT_SHAPE_SPHERE;
@@ -841,7 +838,7 @@ Test(simd, a_cloth_projected_on_columns_gives_the_same_bytes_with_every_instruct
 		cr_assert_eq(world.world->sim.use_columns, levels[l] == PLAIT_SIMD_AVX512, "simd level %d",
 		             (int)levels[l]);
 		plait_object_get_positions(cloth, 0, grid.vertex_count, positions, NULL);
-		plait_object_get_positions(curve, 0, 24, positions + grid.vertex_count, NULL);
+		plait_object_get_positions(curve, 0, ROPE_VERTICES, positions + grid.vertex_count, NULL);
 		if (l == 0) {
 			memcpy(reference, positions, sizeof *reference * (size_t)count);
 		} else {

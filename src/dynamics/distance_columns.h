@@ -25,28 +25,7 @@ static inline __attribute__((always_inline)) void project_alone(plait_distance_b
 	float *x = columns->x, *y = columns->y, *z = columns->z;
 	float wi = columns->w[i], wj = columns->w[j];
 	float dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i];
-	float length_sq = dx * dx + dy * dy + dz * dz;
-	float w_sum = wi + wj;
-	float s;
-	if (rigid) {
-		float rest_sq = block->rest[c] * block->rest[c];
-		float sum_sq = length_sq + rest_sq;
-		sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
-		float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
-		s = w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
-	} else {
-		float length = sqrtf(length_sq);
-		length = length > 1e-12f ? length : 1e-12f;
-		float C = length - block->rest[c];
-		float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
-		bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
-		float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
-		float denominator = (w_sum + alpha_tilde) * length;
-		denominator = w_sum > 0.0f ? denominator : 1.0f;
-		s = (-C - alpha_tilde * block->lambda[c]) / denominator;
-		s = active ? s : 0.0f;
-		block->lambda[c] = block->lambda[c] + s * length;
-	}
+	float s = plait_distance_step(block, c, dx, dy, dz, wi, wj, inverse_h_squared, rigid);
 	float si = wi * s, sj = wj * s;
 	float ex = x[i] - x[j], ey = y[i] - y[j], ez = z[i] - z[j];
 	x[i] = x[i] - si * dx;

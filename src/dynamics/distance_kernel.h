@@ -24,7 +24,41 @@
 #ifndef PLAIT_DYNAMICS_DISTANCE_KERNEL_H
 #define PLAIT_DYNAMICS_DISTANCE_KERNEL_H
 
+#include <math.h>
+
 #include "dynamics/sim.h"
+
+/* The step s of constraint c, given d = x_j - x_i and the inverse masses (and its multiplier
+ * advanced, for a compliant block): the reference arithmetic, which the vector kernels repeat
+ * lane by lane in this order. Shared by the portable kernel (distance_scalar.c) and the column
+ * kernel's constraints alone (distance_columns.h). */
+static inline __attribute__((always_inline)) float plait_distance_step(plait_distance_block *block, int c,
+                                                                       float dx, float dy, float dz, float wi,
+                                                                       float wj, float inverse_h_squared,
+                                                                       bool rigid)
+{
+	float length_sq = dx * dx + dy * dy + dz * dz;
+	float w_sum = wi + wj;
+	if (rigid) {
+		float rest_sq = block->rest[c] * block->rest[c];
+		float sum_sq = length_sq + rest_sq;
+		sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
+		float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
+		return w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
+	}
+	float length = sqrtf(length_sq);
+	length = length > 1e-12f ? length : 1e-12f;
+	float C = length - block->rest[c];
+	float alpha = C > 0.0f ? block->compliance_tension[c] : block->compliance_compression[c];
+	bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
+	float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
+	float denominator = (w_sum + alpha_tilde) * length;
+	denominator = w_sum > 0.0f ? denominator : 1.0f;
+	float s = (-C - alpha_tilde * block->lambda[c]) / denominator;
+	s = active ? s : 0.0f;
+	block->lambda[c] = block->lambda[c] + s * length;
+	return s;
+}
 
 typedef void plait_distance_kernel(plait_distance_block *block, plait_point *points, int begin, int end,
                                    float inverse_h_squared);

@@ -2,45 +2,21 @@
 
 #include <math.h>
 
-/* The reference arithmetic: the vector kernels repeat these operations lane by lane, in this
- * order, so the three give the same bits. A rigid block (no compliance) takes the step without
- * a square root (distance_kernel.h) and never touches the compliance and lambda arrays;
- * `rigid` is a constant in each call below, so the compiler makes two loops. */
+/* The reference arithmetic (plait_distance_step, then each end by its own difference to the
+ * other): the vector kernels repeat these operations lane by lane, in this order, so all give the
+ * same bits. A rigid block (no compliance) takes the step without a square root
+ * (distance_kernel.h) and never touches the compliance and lambda arrays; `rigid` is a constant
+ * in each call below, so the compiler makes two loops. */
 static inline __attribute__((always_inline)) void project_range(plait_distance_block *block,
                                                                 plait_point *points, int begin, int end,
                                                                 float inverse_h_squared, bool rigid)
 {
 	const int(*pair)[2] = (const int(*)[2])block->pair;
-	const float *rest = block->rest, *tension = block->compliance_tension;
-	const float *compression = block->compliance_compression;
-	float *lambda = block->lambda;
 	for (int c = begin; c < end; ++c) {
 		plait_point *pi = &points[pair[c][0]], *pj = &points[pair[c][1]];
 		float wi = pi->w, wj = pj->w;
 		float dx = pj->x.x - pi->x.x, dy = pj->x.y - pi->x.y, dz = pj->x.z - pi->x.z;
-		float length_sq = dx * dx + dy * dy + dz * dz;
-		float w_sum = wi + wj;
-		float s;
-		if (rigid) {
-			float rest_sq = rest[c] * rest[c];
-			float sum_sq = length_sq + rest_sq;
-			sum_sq = sum_sq > 1e-24f ? sum_sq : 1e-24f;
-			float denominator = w_sum > 0.0f ? w_sum * sum_sq : 1.0f;
-			s = w_sum > 0.0f ? (rest_sq - length_sq) / denominator : 0.0f;
-		} else {
-			float length = sqrtf(length_sq);
-			length = length > 1e-12f ? length : 1e-12f;
-			float C = length - rest[c];
-			float alpha = C > 0.0f ? tension[c] : compression[c];
-			bool active = (alpha >= 0.0f) & (w_sum > 0.0f);
-			float alpha_tilde = (alpha > 0.0f ? alpha : 0.0f) * inverse_h_squared;
-			float denominator = (w_sum + alpha_tilde) * length;
-			denominator = w_sum > 0.0f ? denominator : 1.0f;
-			s = (-C - alpha_tilde * lambda[c]) / denominator;
-			s = active ? s : 0.0f;
-			lambda[c] = lambda[c] + s * length;
-		}
-		/* Each end by its own difference to the other (distance_kernel.h). */
+		float s = plait_distance_step(block, c, dx, dy, dz, wi, wj, inverse_h_squared, rigid);
 		float si = wi * s, sj = wj * s;
 		float ex = pi->x.x - pj->x.x, ey = pi->x.y - pj->x.y, ez = pi->x.z - pj->x.z;
 		pi->x.x = pi->x.x - si * dx;
