@@ -207,8 +207,8 @@ static bool closes_foldably(const plait_sim *sim, const int *in_substep, int fir
 	       in_substep[collision] == 1 && plait_tethers_by_particle(&sim->tether);
 }
 
-/* Columns. Where every distance block lies in segments of the column layouts (colouring.c,
- * choose_columns), the points are copied into columns (x, y, z, w arrays) before the first
+/* Columns. Where the distance blocks' segments hold 8 constraints or more on average
+ * (colouring.c, choose_columns), the points are copied into columns (x, y, z, w arrays) before the first
  * distance event of a substep and back before anything else reads them: the column kernel
  * (distance_columns_avx512.c) projects about 1.6 times as fast as the point kernel (hang-128),
  * and the two copies cost a small part of what that saves. Everything else keeps the point
