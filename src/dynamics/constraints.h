@@ -71,6 +71,13 @@ bool plait_tethers_by_particle(const plait_tether_block *block);
  * bits); only when plait_tethers_by_particle. */
 void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *points, plait_simd simd,
                                       int begin, int end);
+/* Whether plait_solve_tethers_of_particles_on_columns can solve them: by particle, and every
+ * row of two (rows of two in runs, no others). */
+bool plait_tethers_on_columns(const plait_tether_block *block);
+/* plait_solve_tethers_of_particles on the points as columns (solver.c, "Columns"), to the same
+ * bits; only when plait_tethers_on_columns and the columns kernels run (AVX-512). */
+void plait_solve_tethers_of_particles_on_columns(plait_tether_block *block, const plait_columns *columns,
+                                                 int begin, int end);
 /* For the frame to come: whether every tether's anchor is pinned (pins change between frames
  * only), and the solver's regrouping of the tethers, derived again if they changed. Out of
  * memory only costs speed: the tethers are then solved as they are stored. */

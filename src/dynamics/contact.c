@@ -1203,6 +1203,84 @@ void plait_collider_pass_range(plait_collider_pass *pass, int begin, int end)
 	}
 }
 
+#if PLAIT_X86_KERNELS
+/* collide_collider_range on the points as columns: the cull reads them there; each particle that
+ * may reach the collider goes through the point array (its own entry, as scratch) and back. */
+static void collide_collider_range_on_columns(collider_job *job, const plait_columns *columns, int begin,
+                                              int end)
+{
+	plait_particles *p = &job->sim->particles;
+	int contacts = 0;
+	sphere_batch sphere_lanes;
+	sphere_batch *batch = job->c->shape.type == PLAIT_SHAPE_SPHERE ? &sphere_lanes : NULL;
+	int near[CULL_CHUNK];
+	plait_collider_bounds bounds = {job->world_lower, job->world_upper, job->ball_centre, job->ball_radius};
+	for (int chunk = begin; chunk < end; chunk += CULL_CHUNK) {
+		int size = end - chunk < CULL_CHUNK ? end - chunk : CULL_CHUNK, whole = size & ~15;
+		int count = plait_cull_columns_avx512(p, columns, &bounds, chunk, whole, near);
+		for (int i = chunk + whole; i < chunk + size; ++i) {
+			p->point[i] = (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+		}
+		count += cull_particles(job, p, chunk + whole, size - whole, near + count);
+		int batch_count = 0;
+		for (int k = 0; k < count; ++k) {
+			int i = near[k];
+			p->point[i] = (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+			contacts += collide_particle(job, i, batch, &batch_count);
+		}
+		/* Each particle's result is its own, whichever batch it is solved in. */
+		if (batch_count > 0) {
+			contacts += finish_sphere_batch(job, batch, batch_count);
+		}
+		for (int k = 0; k < count; ++k) {
+			int i = near[k];
+			columns->x[i] = p->point[i].x.x;
+			columns->y[i] = p->point[i].x.y;
+			columns->z[i] = p->point[i].x.z;
+		}
+	}
+	atomic_fetch_add_explicit(&job->contacts, contacts, memory_order_relaxed);
+}
+#endif
+
+bool plait_collider_pass_on_columns(const plait_collider_pass *pass)
+{
+#if PLAIT_X86_KERNELS
+	for (int j = 0; j < pass->count; ++j) {
+		if (!pass->jobs[j].bounded || pass->jobs[j].indices != NULL) {
+			return false;
+		}
+	}
+	for (int j = 0; j < pass->reverse_count; ++j) {
+		if (!pass->reverse[j].bounded || pass->reverse[j].indices != NULL) {
+			return false;
+		}
+	}
+	return true;
+#else
+	(void)pass;
+	return false;
+#endif
+}
+
+void plait_collider_pass_range_on_columns(plait_collider_pass *pass, const plait_columns *columns, int begin,
+                                          int end)
+{
+#if PLAIT_X86_KERNELS
+	for (int j = 0; j < pass->count; ++j) {
+		collide_collider_range_on_columns(&pass->jobs[j], columns, begin, end);
+	}
+	for (int j = 0; j < pass->reverse_count; ++j) {
+		collide_collider_range_on_columns(&pass->reverse[j], columns, begin, end);
+	}
+#else
+	(void)pass;
+	(void)columns;
+	(void)begin;
+	(void)end;
+#endif
+}
+
 void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass)
 {
 	for (int j = 0; j < pass->count; ++j) {

@@ -62,6 +62,13 @@ typedef struct plait_collider_pass {
 /* False when the iteration cannot go particle by particle (then plait_collide). */
 bool plait_collider_pass_begin(plait_sim *sim, plait_collider_pass *pass);
 void plait_collider_pass_range(plait_collider_pass *pass, int begin, int end);
+/* Whether the pass can run on the points as columns (every collider bounded, over all
+ * particles), and the pass so (solver.c, "Columns"), to the same bits; only where the column
+ * kernels run (AVX-512). The point array is scratch there: written for the particles that may
+ * reach a collider (and the last few of each 256), stale for the others. */
+bool plait_collider_pass_on_columns(const plait_collider_pass *pass);
+void plait_collider_pass_range_on_columns(plait_collider_pass *pass, const plait_columns *columns, int begin,
+                                          int end);
 /* Adds the pass's contacts to the frame's. */
 void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass);
 

@@ -9,8 +9,9 @@
 
 #include "dynamics/points_avx512.h"
 
-int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_bounds *bounds, int begin,
-                                int count, int *near)
+static inline __attribute__((always_inline)) int cull(const plait_particles *p, const plait_columns *columns,
+                                                      const plait_collider_bounds *bounds, int begin,
+                                                      int count, int *near)
 {
 	const __m512 zero = _mm512_setzero_ps(), half = _mm512_set1_ps(0.5f);
 	const __m512 lx = _mm512_set1_ps(bounds->lower.x), ly = _mm512_set1_ps(bounds->lower.y),
@@ -29,7 +30,14 @@ int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_b
 			continue;
 		}
 		__m512 bx, by, bz, w, ax, ay, az;
-		load_points16(p->point, i, &bx, &by, &bz, &w);
+		if (columns != NULL) {
+			bx = _mm512_loadu_ps(columns->x + i);
+			by = _mm512_loadu_ps(columns->y + i);
+			bz = _mm512_loadu_ps(columns->z + i);
+			w = _mm512_loadu_ps(columns->w + i);
+		} else {
+			load_points16(p->point, i, &bx, &by, &bz, &w);
+		}
 		load_vec3x16(p->x_prev + i, &ax, &ay, &az);
 		/* path_may_reach, as contact_avx2.c. */
 		__mmask16 in_box = (__mmask16)(_mm512_cmp_ps_mask(_mm512_max_ps(ax, bx), lx, _CMP_GE_OQ) &
@@ -57,6 +65,21 @@ int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_b
 			}
 		}
 	}
+	return n;
+}
+
+int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_bounds *bounds, int begin,
+                                int count, int *near)
+{
+	int n = cull(p, NULL, bounds, begin, count, near);
+	_mm256_zeroupper();
+	return n;
+}
+
+int plait_cull_columns_avx512(const plait_particles *p, const plait_columns *columns,
+                              const plait_collider_bounds *bounds, int begin, int count, int *near)
+{
+	int n = cull(p, columns, bounds, begin, count, near);
 	_mm256_zeroupper();
 	return n;
 }

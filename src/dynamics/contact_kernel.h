@@ -23,6 +23,9 @@ int plait_cull_particles_avx2(const plait_particles *p, const plait_collider_bou
 /* The same sixteen at a time (count a multiple of 16), in AVX-512 (contact_avx512.c). */
 int plait_cull_particles_avx512(const plait_particles *p, const plait_collider_bounds *bounds, int begin,
                                 int count, int *near);
+/* The same on the points as columns (solver.c, "Columns"), to the same particles. */
+int plait_cull_columns_avx512(const plait_particles *p, const plait_columns *columns,
+                              const plait_collider_bounds *bounds, int begin, int count, int *near);
 #endif
 
 #endif

@@ -11,7 +11,8 @@
 #include "dynamics/points_avx512.h"
 
 static inline __attribute__((always_inline)) void step_range(const plait_particle_step *k, plait_particles *p,
-                                                             int begin, int end, bool ending, bool beginning)
+                                                             const plait_columns *columns, int begin, int end,
+                                                             bool ending, bool beginning)
 {
 	const __m512 zero = _mm512_setzero_ps(), h = _mm512_set1_ps(k->h),
 	             inverse_h = _mm512_set1_ps(k->inverse_h);
@@ -31,7 +32,14 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	int i = begin;
 	for (; i + 16 <= end; i += 16) {
 		__m512 x, y, z, w;
-		load_points16(p->point, i, &x, &y, &z, &w);
+		if (columns != NULL) {
+			x = _mm512_loadu_ps(columns->x + i);
+			y = _mm512_loadu_ps(columns->y + i);
+			z = _mm512_loadu_ps(columns->z + i);
+			w = _mm512_loadu_ps(columns->w + i);
+		} else {
+			load_points16(p->point, i, &x, &y, &z, &w);
+		}
 		__mmask16 pinned = _mm512_cmp_ps_mask(w, zero, _CMP_EQ_OQ);
 		uint64_t flags[2];
 		memcpy(flags, p->flags + i, sizeof flags);
@@ -118,14 +126,29 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 			y = _mm512_load_ps(ly);
 			z = _mm512_load_ps(lz);
 		}
-		store_points16(p->point, i, x, y, z, w);
+		if (columns != NULL) {
+			_mm512_storeu_ps(columns->x + i, x);
+			_mm512_storeu_ps(columns->y + i, y);
+			_mm512_storeu_ps(columns->z + i, z);
+		} else {
+			store_points16(p->point, i, x, y, z, w);
+		}
 	}
 	for (; i < end; ++i) {
+		/* The last few (fewer than 16) through the point array: the portable operations. */
+		if (columns != NULL) {
+			p->point[i] = (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+		}
 		if (ending) {
 			plait_end_particle(k, p, i);
 		}
 		if (beginning) {
 			plait_begin_particle(k, p, i);
+		}
+		if (columns != NULL) {
+			columns->x[i] = p->point[i].x.x;
+			columns->y[i] = p->point[i].x.y;
+			columns->z[i] = p->point[i].x.z;
 		}
 	}
 	_mm256_zeroupper();
@@ -135,11 +158,21 @@ void plait_step_particles_avx512(const plait_particle_step *k, plait_particles *
                                  bool ending, bool beginning)
 {
 	if (ending && beginning) {
-		step_range(k, p, begin, end, true, true);
+		step_range(k, p, NULL, begin, end, true, true);
 	} else if (ending) {
-		step_range(k, p, begin, end, true, false);
+		step_range(k, p, NULL, begin, end, true, false);
 	} else if (beginning) {
-		step_range(k, p, begin, end, false, true);
+		step_range(k, p, NULL, begin, end, false, true);
+	}
+}
+
+void plait_step_columns_avx512(const plait_particle_step *k, plait_particles *p, const plait_columns *columns,
+                               int begin, int end, bool beginning)
+{
+	if (beginning) {
+		step_range(k, p, columns, begin, end, true, true);
+	} else {
+		step_range(k, p, columns, begin, end, true, false);
 	}
 }
 #endif

@@ -74,5 +74,11 @@ void plait_step_particles_avx2(const plait_particle_step *k, plait_particles *p,
 /* The same sixteen at a time (particle_avx512.c); only when the processor runs AVX-512F. */
 void plait_step_particles_avx512(const plait_particle_step *k, plait_particles *p, int begin, int end,
                                  bool ending, bool beginning);
+/* The end of a substep and, with `beginning`, the start of the next, on the points as columns
+ * (solver.c, "Columns"; w is read there, not written), to the same bits; the point array is
+ * written only for the last (end - begin) % 16 particles, which take the portable operations
+ * through it. */
+void plait_step_columns_avx512(const plait_particle_step *k, plait_particles *p, const plait_columns *columns,
+                               int begin, int end, bool beginning);
 
 #endif

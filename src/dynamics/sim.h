@@ -330,6 +330,10 @@ typedef struct plait_sim {
 	 * allow it (solver.c, fold_closing_passes); always on but for tests comparing the two. */
 	bool fold_closing_passes;
 	long long folded_substeps; /* substeps that ran folded, since the sim was made (for tests) */
+	/* Run a folded close on the points as columns when it can (solver.c, "Columns"); always on
+	 * but for tests comparing the two. */
+	bool close_on_columns;
+	long long closed_on_columns; /* substeps whose close ran on columns (for tests) */
 
 	/* Scratch of the particle-pair stage (spatial hash and contacts). */
 	bool particle_pairs_active;

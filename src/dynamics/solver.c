@@ -144,76 +144,18 @@ static void end_and_begin_range(void *context, int begin, int end)
 	step_particles(context, begin, end, true, true);
 }
 
-/* A substep that closes with tethers and then collisions, each once, where every particle's
- * tethers and collisions touch that particle alone (anchors pinned, colliders only, without
- * vertices of their own: plait_tethers_by_particle, plait_collider_pass_begin), runs them in its
- * last pass over the particles, chunk by chunk: tethers, colliders, the velocity update and the
- * next substep's start. Each particle goes through the same operations in the same order as
- * with a pass for each, so the bits are the same; the points are read once instead of three
- * times, with two hand-overs to the workers less (hang-512 moves about 55 MB a substep in
- * these passes, more than the last-level cache holds). */
-typedef struct folded_job {
-	particle_job step;
-	bool beginning;
-	plait_collider_pass *colliders;
-	_Atomic long long collide_ns; /* time in the colliders, summed over the workers */
-} folded_job;
-
-static void folded_range(void *context, int begin, int end)
-{
-	folded_job *job = context;
-	plait_sim *sim = job->step.sim;
-	plait_solve_tethers_of_particles(&sim->tether, sim->particles.point, sim->simd, begin, end);
-	double start = plait_seconds();
-	plait_collider_pass_range(job->colliders, begin, end);
-	atomic_fetch_add_explicit(&job->collide_ns, (long long)((plait_seconds() - start) * 1e9),
-	                          memory_order_relaxed);
-	step_particles(&job->step, begin, end, true, job->beginning);
-}
-
-/* The substep's closing tethers and collisions with its velocity update, and the next
- * substep's start when `beginning` (t_next: where that start's pins go). */
-static void run_folded_close(plait_sim *sim, const particle_job *job, plait_collider_pass *colliders,
-                             bool beginning, float t_next)
-{
-	sim->folded_substeps += 1;
-	folded_job folded = {*job, beginning, colliders, 0};
-	folded.step.t_end = t_next;
-	plait_parallel_for(&sim->parallel, folded_range, &folded, 0, sim->particles.count, PARTICLE_GRAIN);
-	plait_collider_pass_end(sim, colliders);
-	sim->constraint_solves += sim->tether.count;
-	/* Per worker, roughly: the workers ran the colliders side by side. */
-	sim->collision_seconds += 1e-9 * (double)atomic_load_explicit(&folded.collide_ns, memory_order_relaxed) /
-	                          (double)sim->parallel.worker_count;
-	if (beginning) {
-		/* Only transforms move: these colliders have no vertices (pins) of their own. */
-		plait_colliders_begin_substep(sim, job->t_end, t_next);
-	} else {
-		plait_contacts_end_substep(sim);
-	}
-}
-
-/* Whether substep events [first, last) close with one tether event and then one collision
- * event that can be folded into the particle pass (above). */
-static bool closes_foldably(const plait_sim *sim, const int *in_substep, int first, int last, bool air)
-{
-	const plait_schedule *schedule = &sim->schedule;
-	if (!sim->fold_closing_passes || air || last - first < 2) {
-		return false;
-	}
-	int tether = schedule->events[last - 2], collision = schedule->events[last - 1];
-	return sim->schedule_kinds[tether] == PLAIT_KIND_TETHER &&
-	       sim->schedule_kinds[collision] == PLAIT_KIND_COLLISION && in_substep[tether] == 1 &&
-	       in_substep[collision] == 1 && plait_tethers_by_particle(&sim->tether);
-}
-
 /* Columns. Where the distance blocks' segments hold 8 constraints or more on average
- * (colouring.c, choose_columns), the points are copied into columns (x, y, z, w arrays) before the first
- * distance event of a substep and back before anything else reads them: the column kernel
- * (distance_columns_avx512.c) projects about 1.6 times as fast as the point kernel (hang-128),
- * and the two copies cost a small part of what that saves. Everything else keeps the point
- * array. The copies are exact and the column kernel gives the point kernel's bits, so results
- * do not change. */
+ * (colouring.c, choose_columns), the points are copied into columns (x, y, z, w arrays) before
+ * the first distance event of a substep and back before anything else reads them: the column
+ * kernel (distance_columns_avx512.c) projects about 1.6 times as fast as the point kernel
+ * (hang-128). A folded close whose tethers are all rows of two and whose colliders are all
+ * bounded runs on the columns too (folded_range_on_columns: column versions of the tether rows,
+ * the collider cull and the particle pass; a particle that may reach a collider goes through
+ * its own entry of the point array and back), and the points stay there for the next substep:
+ * a frame then copies them once each way instead of once each way a substep. That was 10% of
+ * hang-512's frame (4 MB each way a substep, from memory), 4% of hang-128's. Everything else
+ * keeps the point array. The copies are exact and the column kernels give the point kernels'
+ * bits, so results do not change (test_threads, a_close_on_columns_gives_the_point_arrays_bits). */
 static plait_columns columns_of(const plait_sim *sim)
 {
 	return (plait_columns){sim->column_x, sim->column_y, sim->column_z, sim->column_w,
@@ -256,6 +198,107 @@ static void leave_columns(plait_sim *sim)
 		plait_parallel_for(&sim->parallel, from_columns_range, sim, 0, sim->particles.count, PARTICLE_GRAIN);
 		sim->in_columns = false;
 	}
+}
+
+/* A substep that closes with tethers and then collisions, each once, where every particle's
+ * tethers and collisions touch that particle alone (anchors pinned, colliders only, without
+ * vertices of their own: plait_tethers_by_particle, plait_collider_pass_begin), runs them in its
+ * last pass over the particles, chunk by chunk: tethers, colliders, the velocity update and the
+ * next substep's start. Each particle goes through the same operations in the same order as
+ * with a pass for each, so the bits are the same; the points are read once instead of three
+ * times, with two hand-overs to the workers less (hang-512 moves about 55 MB a substep in
+ * these passes, more than the last-level cache holds). */
+typedef struct folded_job {
+	particle_job step;
+	bool beginning;
+	bool on_columns; /* the points are in columns and stay there (below, "Columns") */
+	plait_collider_pass *colliders;
+	_Atomic long long collide_ns; /* time in the colliders, summed over the workers */
+} folded_job;
+
+/* folded_range on the points as columns: the same operations on the same values. */
+static void folded_range_on_columns(folded_job *job, int begin, int end)
+{
+#if PLAIT_X86_KERNELS
+	plait_sim *sim = job->step.sim;
+	plait_columns columns = columns_of(sim);
+	plait_solve_tethers_of_particles_on_columns(&sim->tether, &columns, begin, end);
+	double start = plait_seconds();
+	plait_collider_pass_range_on_columns(job->colliders, &columns, begin, end);
+	atomic_fetch_add_explicit(&job->collide_ns, (long long)((plait_seconds() - start) * 1e9),
+	                          memory_order_relaxed);
+	plait_particle_step k = step_of(&job->step);
+	plait_step_columns_avx512(&k, &sim->particles, &columns, begin, end, job->beginning);
+#else
+	(void)job;
+	(void)begin;
+	(void)end;
+#endif
+}
+
+static void folded_range(void *context, int begin, int end)
+{
+	folded_job *job = context;
+	plait_sim *sim = job->step.sim;
+	if (job->on_columns) {
+		folded_range_on_columns(job, begin, end);
+		return;
+	}
+	plait_solve_tethers_of_particles(&sim->tether, sim->particles.point, sim->simd, begin, end);
+	double start = plait_seconds();
+	plait_collider_pass_range(job->colliders, begin, end);
+	atomic_fetch_add_explicit(&job->collide_ns, (long long)((plait_seconds() - start) * 1e9),
+	                          memory_order_relaxed);
+	step_particles(&job->step, begin, end, true, job->beginning);
+}
+
+/* The substep's closing tethers and collisions with its velocity update, and the next
+ * substep's start when `beginning` (t_next: where that start's pins go). */
+static void run_folded_close(plait_sim *sim, const particle_job *job, plait_collider_pass *colliders,
+                             bool beginning, float t_next)
+{
+	sim->folded_substeps += 1;
+	/* On columns when every part of the close has a column kernel; the points then stay there
+	 * for the next substep, or go back once at the frame's end. */
+	bool on_columns = sim->in_columns && sim->close_on_columns && sim->simd == PLAIT_SIMD_AVX512 &&
+	                  plait_tethers_on_columns(&sim->tether) && plait_collider_pass_on_columns(colliders);
+	if (!on_columns) {
+		leave_columns(sim);
+	}
+	folded_job folded = {*job, beginning, on_columns, colliders, 0};
+	folded.step.t_end = t_next;
+	plait_parallel_for(&sim->parallel, folded_range, &folded, 0, sim->particles.count, PARTICLE_GRAIN);
+	if (on_columns) {
+		sim->closed_on_columns += 1;
+		if (!beginning) {
+			leave_columns(sim);
+		}
+	}
+	plait_collider_pass_end(sim, colliders);
+	sim->constraint_solves += sim->tether.count;
+	/* Per worker, roughly: the workers ran the colliders side by side. */
+	sim->collision_seconds += 1e-9 * (double)atomic_load_explicit(&folded.collide_ns, memory_order_relaxed) /
+	                          (double)sim->parallel.worker_count;
+	if (beginning) {
+		/* Only transforms move: these colliders have no vertices (pins) of their own. */
+		plait_colliders_begin_substep(sim, job->t_end, t_next);
+	} else {
+		plait_contacts_end_substep(sim);
+	}
+}
+
+/* Whether substep events [first, last) close with one tether event and then one collision
+ * event that can be folded into the particle pass (above). */
+static bool closes_foldably(const plait_sim *sim, const int *in_substep, int first, int last, bool air)
+{
+	const plait_schedule *schedule = &sim->schedule;
+	if (!sim->fold_closing_passes || air || last - first < 2) {
+		return false;
+	}
+	int tether = schedule->events[last - 2], collision = schedule->events[last - 1];
+	return sim->schedule_kinds[tether] == PLAIT_KIND_TETHER &&
+	       sim->schedule_kinds[collision] == PLAIT_KIND_COLLISION && in_substep[tether] == 1 &&
+	       in_substep[collision] == 1 && plait_tethers_by_particle(&sim->tether);
 }
 
 static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, plait_sweep sweep)
@@ -415,6 +458,9 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		}
 		sim->damp_shared = sim->damp_shared && sim->materials[m].damp_factor == sim->shared_damp_factor;
 	}
+	/* Columns never carry over from one frame to the next: a frame ends with the points in the
+	 * point array, or fails and is restored there. */
+	sim->in_columns = false;
 	bool begun = false; /* the particles' part of this substep's start is done */
 	for (int s = 0; s < substeps; ++s) {
 		float t0 = (float)s / (float)substeps, t1 = (float)(s + 1) / (float)substeps;
@@ -458,7 +504,9 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 			run_event(sim, (plait_kind)sim->schedule_kinds[k], inverse_h_squared, sweep);
 		}
 
-		leave_columns(sim);
+		if (!fold) {
+			leave_columns(sim); /* (a folded close leaves them itself, or stays there) */
+		}
 		/* The substep must not end with anything passed through anything. */
 		if (sim->mesh_contacts_active) {
 			double start = plait_seconds();

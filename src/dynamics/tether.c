@@ -781,6 +781,59 @@ static int others_bound(const plait_tether_block *others, int key)
 	return first;
 }
 
+#if PLAIT_X86_KERNELS
+static plait_point point_of(const plait_columns *columns, int i)
+{
+	return (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+}
+#endif
+
+bool plait_tethers_on_columns(const plait_tether_block *block)
+{
+	return block->count == 0 || (plait_tethers_by_particle(block) && block->lanes->others.count == 0);
+}
+
+void plait_solve_tethers_of_particles_on_columns(plait_tether_block *block, const plait_columns *columns,
+                                                 int begin, int end)
+{
+#if PLAIT_X86_KERNELS
+	const plait_tether_lanes *lanes = block->lanes;
+	if (block->count == 0 || lanes == NULL) {
+		return;
+	}
+	for (int r = 0; r < lanes->run_count; ++r) {
+		const tether_run *run = &lanes->runs[r];
+		int first = lower_bound(lanes->particle, run->begin, run->end, begin);
+		int last = lower_bound(lanes->particle, first, run->end, end);
+		vec3 a0 = point_of(columns, run->anchor[0]).x, a1 = point_of(columns, run->anchor[1]).x;
+		for (int b = first; b < last; b += LANE_BATCH) {
+			int count = last - b < LANE_BATCH ? last - b : LANE_BATCH;
+			int unfound[LANE_BATCH];
+			int missing = plait_tether_rows_columns_avx512(columns, lanes->particle + b, lanes->length[0] + b,
+			                                               lanes->length[1] + b, run->stiffness, a0, a1,
+			                                               count, (float)INSIDE_TOLERANCE, unfound);
+			/* The exact search on copies of the row's three points (the anchors are pinned). */
+			for (int m = 0; m < missing; ++m) {
+				int row = b + unfound[m], i = lanes->particle[row];
+				plait_point three[3] = {point_of(columns, i), point_of(columns, run->anchor[0]),
+				                        point_of(columns, run->anchor[1])};
+				const int anchors[2] = {1, 2};
+				project_pair_exactly(three, 0, anchors, lanes->length[0][row], lanes->length[1][row],
+				                     run->stiffness);
+				columns->x[i] = three[0].x.x;
+				columns->y[i] = three[0].x.y;
+				columns->z[i] = three[0].x.z;
+			}
+		}
+	}
+#else
+	(void)block;
+	(void)columns;
+	(void)begin;
+	(void)end;
+#endif
+}
+
 void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *points, plait_simd simd,
                                       int begin, int end)
 {

@@ -76,9 +76,71 @@ static inline bool consecutive16(const int *particle)
 	return _mm512_cmpneq_epi32_mask(_mm512_loadu_si512(particle), expect) == 0;
 }
 
-int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
-                             const float *length1, float stiffness, vec3 anchor0, vec3 anchor1, int count,
-                             float tolerance, int *unfound)
+/* Sixteen rows' points from the point array or (columns not NULL) the columns: whole where
+ * the rows' particles are consecutive, else one by one. */
+static inline __attribute__((always_inline)) void load_rows(const plait_point *points,
+                                                            const plait_columns *columns, bool run, int first,
+                                                            const int *index, __m512 *x, __m512 *y, __m512 *z,
+                                                            __m512 *w)
+{
+	if (columns == NULL) {
+		if (run) {
+			load_points16(points, first, x, y, z, w);
+		} else {
+			gather16(points, index, x, y, z, w);
+		}
+		return;
+	}
+	if (run) {
+		*x = _mm512_loadu_ps(columns->x + first);
+		*y = _mm512_loadu_ps(columns->y + first);
+		*z = _mm512_loadu_ps(columns->z + first);
+		*w = _mm512_loadu_ps(columns->w + first);
+		return;
+	}
+	__m512i lanes = _mm512_loadu_si512((const void *)index);
+	*x = _mm512_i32gather_ps(lanes, columns->x, 4);
+	*y = _mm512_i32gather_ps(lanes, columns->y, 4);
+	*z = _mm512_i32gather_ps(lanes, columns->z, 4);
+	*w = _mm512_i32gather_ps(lanes, columns->w, 4);
+}
+
+/* The inverse of load_rows for the first `count` rows (a run has all sixteen); w is not
+ * written to the columns, where it does not change. */
+static inline __attribute__((always_inline)) void store_rows(plait_point *points,
+                                                             const plait_columns *columns, bool run,
+                                                             int first, const int *index, int count, __m512 x,
+                                                             __m512 y, __m512 z, __m512 w)
+{
+	if (columns == NULL) {
+		if (run) {
+			store_points16(points, first, x, y, z, w);
+		} else {
+			scatter16(points, index, count, x, y, z, w);
+		}
+		return;
+	}
+	if (run) {
+		_mm512_storeu_ps(columns->x + first, x);
+		_mm512_storeu_ps(columns->y + first, y);
+		_mm512_storeu_ps(columns->z + first, z);
+		return;
+	}
+	_Alignas(64) float lx[16], ly[16], lz[16];
+	_mm512_store_ps(lx, x);
+	_mm512_store_ps(ly, y);
+	_mm512_store_ps(lz, z);
+	for (int k = 0; k < count; ++k) {
+		columns->x[index[k]] = lx[k];
+		columns->y[index[k]] = ly[k];
+		columns->z[index[k]] = lz[k];
+	}
+}
+
+static inline __attribute__((always_inline)) int
+tether_rows(plait_point *points, const plait_columns *columns, const int *particle, const float *length0,
+            const float *length1, float stiffness, vec3 anchor0, vec3 anchor1, int count, float tolerance,
+            int *unfound)
 {
 	const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f);
 	const __m512 tiny = _mm512_set1_ps(1e-12f), negative_zero = _mm512_set1_ps(-0.0f);
@@ -97,14 +159,12 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		int index[16];
 		lanes3 p;
 		__m512 w, l0, l1;
-		if (run) {
-			load_points16(points, particle[b], &p.x, &p.y, &p.z, &w);
-		} else {
+		if (!run) {
 			for (int k = 0; k < 16; ++k) {
 				index[k] = particle[b + (k < n ? k : 0)];
 			}
-			gather16(points, index, &p.x, &p.y, &p.z, &w);
 		}
+		load_rows(points, columns, run, particle[b], index, &p.x, &p.y, &p.z, &w);
 		l0 = _mm512_maskz_loadu_ps(lanes, length0 + b);
 		l1 = _mm512_maskz_loadu_ps(lanes, length1 + b);
 		lanes3 d0 = sub3(p, a0), d1 = sub3(p, a1);
@@ -132,11 +192,7 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 			/* Every taut row ends inside its other tether (tether_avx2.c). */
 			lanes3 q = select3(none, p, mul_add3(p, t, sub3(projected, p)));
 			q = select3(taut, q, p);
-			if (run) {
-				store_points16(points, particle[b], q.x, q.y, q.z, w);
-			} else {
-				scatter16(points, index, n, q.x, q.y, q.z, w);
-			}
+			store_rows(points, columns, run, particle[b], index, n, q.x, q.y, q.z, w);
 			continue;
 		}
 		lanes3 from_o = select3(first_worst, d1, d0);
@@ -172,18 +228,33 @@ int plait_tether_rows_avx512(plait_point *points, const int *particle, const flo
 		/* Written back: taut rows found here; the rest unchanged (the exact search reads them). */
 		q = select3((__mmask16)(taut & found), q, p);
 		unsigned missing = (unsigned)(taut & (__mmask16)~found);
-		if (run) {
-			store_points16(points, particle[b], q.x, q.y, q.z, w);
-		} else {
-			scatter16(points, index, n, q.x, q.y, q.z, w);
-		}
+		store_rows(points, columns, run, particle[b], index, n, q.x, q.y, q.z, w);
 		while (missing != 0) {
 			int lane = __builtin_ctz(missing);
 			missing &= missing - 1;
 			unfound[unfound_count++] = b + lane;
 		}
 	}
-	_mm256_zeroupper();
 	return unfound_count;
+}
+
+int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
+                             const float *length1, float stiffness, vec3 anchor0, vec3 anchor1, int count,
+                             float tolerance, int *unfound)
+{
+	int missing = tether_rows(points, NULL, particle, length0, length1, stiffness, anchor0, anchor1, count,
+	                          tolerance, unfound);
+	_mm256_zeroupper();
+	return missing;
+}
+
+int plait_tether_rows_columns_avx512(const plait_columns *columns, const int *particle, const float *length0,
+                                     const float *length1, float stiffness, vec3 anchor0, vec3 anchor1,
+                                     int count, float tolerance, int *unfound)
+{
+	int missing = tether_rows(NULL, columns, particle, length0, length1, stiffness, anchor0, anchor1, count,
+	                          tolerance, unfound);
+	_mm256_zeroupper();
+	return missing;
 }
 #endif

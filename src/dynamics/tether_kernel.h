@@ -19,6 +19,10 @@ int plait_tether_rows_avx2(plait_point *points, const int *particle, const float
 int plait_tether_rows_avx512(plait_point *points, const int *particle, const float *length0,
                              const float *length1, float stiffness, vec3 anchor0, vec3 anchor1, int count,
                              float tolerance, int *unfound);
+/* The same on the points as columns (solver.c, "Columns"): w is read there, not written. */
+int plait_tether_rows_columns_avx512(const plait_columns *columns, const int *particle, const float *length0,
+                                     const float *length1, float stiffness, vec3 anchor0, vec3 anchor1,
+                                     int count, float tolerance, int *unfound);
 #endif
 
 #endif
