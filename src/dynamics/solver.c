@@ -422,8 +422,11 @@ static void frame_pins_range(void *context, int begin, int end)
 	}
 }
 
-static void restore_frame_start(plait_particles *p)
+/* The frame's start back in the point array (the columns are then stale). */
+static void restore_frame_start(plait_sim *sim)
 {
+	plait_particles *p = &sim->particles;
+	sim->in_columns = false;
 	memcpy(p->point, p->point_frame, sizeof(plait_point) * (size_t)p->count);
 	memcpy(p->v, p->v_frame, sizeof(vec3) * (size_t)p->count);
 }
@@ -566,11 +569,11 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 	plait_parallel_end(&sim->parallel);
 	plait_float_mode_leave(saved_mode);
 	if (result != PLAIT_OK) {
-		restore_frame_start(p);
+		restore_frame_start(sim);
 		return result;
 	}
 	if (atomic_load_explicit(&frame.nonfinite, memory_order_relaxed) != 0) {
-		restore_frame_start(p);
+		restore_frame_start(sim);
 		return plait_error_set(error, PLAIT_ERROR_NONFINITE,
 		                       "frame %d produced a non-finite position or velocity; try more substeps or "
 		                       "lower resistances",
