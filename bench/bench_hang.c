@@ -26,9 +26,20 @@
  * a pool of K workers (tools/plait/thread_pool.h, the calling thread included) to the world's
  * task hooks. It needs the tool layer (plait_toollib); without it only 1 is accepted.
  *
+ * --alternate SWITCH (fold, close or columns) times two of the solver's paths that give the same
+ * bits side by side in each run, switching between them frame by frame: the host's drift then
+ * falls on both alike (separate runs on a shared host swing by 15%; session 19 in
+ * docs/performance.md). It reaches into the library's internals (world/world.h) for the switch:
+ *   fold     the substeps' closing tethers and collisions folded into the last particle pass, or not;
+ *   close    that close on the points as columns, or on the point array;
+ *   columns  the distance kernel on the points as columns, or on the point array.
+ * Run r takes the path "on" in frames of parity r, so an even number of runs evens out frames
+ * that cost more than their neighbours. Adds a line per size and thread count: each path's ms a
+ * frame over all runs, and on / off.
+ *
  * usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers none|euclidean|geodesic]
  *                   [--runs R] [--frames F] [--iterations I] [--substeps S] [--threads LIST]
- *                   [--simd auto|scalar|avx2|avx512] [--strain-window W]
+ *                   [--simd auto|scalar|avx2|avx512] [--strain-window W] [--alternate fold|close|columns]
  */
 #include <math.h>
 #include <stdio.h>
@@ -39,6 +50,8 @@
 #include <time.h>
 
 #include <plait/plait.h>
+
+#include "world/world.h" /* --alternate only: the solver's switches */
 
 #ifdef PLAIT_BENCH_HAVE_POOL
 #include "thread_pool.h"
@@ -56,7 +69,11 @@ typedef struct hang_options {
 	plait_simd simd;
 	plait_tether_mode tethers;
 	plait_thread_pool *pool; /* NULL: one thread */
+	int alternate;           /* 0: no; 1 fold, 2 close, 3 columns */
+	int parity;              /* frames with frame % 2 == parity take the path "on" */
 } hang_options;
+
+static const char *const alternate_names[4] = {"", "fold", "close", "columns"};
 
 static double now_seconds(void)
 {
@@ -77,7 +94,34 @@ typedef struct hang_result {
 	double window_max, window_p99; /* worst max and worst p99 over the strain window */
 	size_t bytes_per_vertex;
 	int nonfinite;
+	double seconds_on, seconds_off; /* --alternate: stepping time of each path */
+	int frames_on, frames_off;
 } hang_result;
+
+/* Sets the --alternate switch of the world's solver; false when that path cannot be taken
+ * (columns without the AVX-512 kernels). */
+static bool set_switch(plait_world_id world, int alternate, bool on)
+{
+	plait_sim *sim = &world.world->sim;
+	switch (alternate) {
+	case 1:
+		sim->fold_closing_passes = on;
+		return true;
+	case 2:
+		sim->close_on_columns = on;
+		return true;
+	case 3:
+		/* The columns are allocated when the blocks are coloured (the first step) and only where
+		 * they pay; then they can be left unused for a frame. */
+		if (on && sim->columns_capacity < sim->particles.count) {
+			return sim->frame == 0;
+		}
+		sim->use_columns = on;
+		return true;
+	default:
+		return true;
+	}
+}
 
 /* Atomic in case the library allocates from its worker threads. */
 static atomic_size_t allocated_bytes;
@@ -219,9 +263,24 @@ static hang_result run_hang(int n, const hang_options *options)
 
 	double stepping_seconds = 0.0;
 	for (int frame = 0; frame < options->frames; ++frame) {
+		bool on = frame % 2 == options->parity;
+		if (options->alternate != 0 && !set_switch(world, options->alternate, on)) {
+			fprintf(stderr, "bench_hang: --alternate %s: this run cannot take that path\n",
+			        alternate_names[options->alternate]);
+			exit(1);
+		}
 		double start = now_seconds();
 		plait_result stepped = plait_world_step(world, &error);
-		stepping_seconds += now_seconds() - start;
+		double seconds = now_seconds() - start;
+		stepping_seconds += seconds;
+		/* The first frame colours the blocks and builds the tethers' lanes: left out. */
+		if (frame > 0 && on) {
+			result.seconds_on += seconds;
+			result.frames_on += 1;
+		} else if (frame > 0) {
+			result.seconds_off += seconds;
+			result.frames_off += 1;
+		}
 		if (stepped != PLAIT_OK) {
 			fprintf(stderr, "bench_hang: frame %d: %s\n", frame, error.message);
 			result.nonfinite = 1;
@@ -299,6 +358,17 @@ int main(int argc, char **argv)
 			options.tethers = strcmp(argv[a], "geodesic") == 0    ? PLAIT_TETHER_GEODESIC
 			                  : strcmp(argv[a], "euclidean") == 0 ? PLAIT_TETHER_EUCLIDEAN
 			                                                      : PLAIT_TETHER_NONE;
+		} else if (strcmp(argv[a], "--alternate") == 0 && a + 1 < argc) {
+			++a;
+			options.alternate = 0;
+			for (int k = 1; k < 4; ++k) {
+				options.alternate = strcmp(argv[a], alternate_names[k]) == 0 ? k : options.alternate;
+			}
+			if (options.alternate == 0) {
+				fprintf(stderr, "bench_hang: --alternate expects fold, close or columns, got '%s'\n",
+				        argv[a]);
+				return 2;
+			}
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
 			options.substeps = atoi(argv[++a]);
 		} else if (strcmp(argv[a], "--threads") == 0 && a + 1 < argc) {
@@ -317,7 +387,8 @@ int main(int argc, char **argv)
 			fprintf(stderr,
 			        "usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers "
 			        "none|euclidean|geodesic] [--runs R] [--frames F] [--iterations I] [--substeps S] "
-			        "[--threads LIST] [--simd auto|scalar|avx2|avx512] [--strain-window W]\n");
+			        "[--threads LIST] [--simd auto|scalar|avx2|avx512] [--strain-window W] [--alternate "
+			        "fold|close|columns]\n");
 			return 2;
 		}
 	}
@@ -358,10 +429,17 @@ int main(int argc, char **argv)
 #endif
 				double times[64];
 				hang_result last = {0};
+				double seconds_on = 0.0, seconds_off = 0.0;
+				int frames_on = 0, frames_off = 0;
 				int runs = options.runs > 64 ? 64 : options.runs;
 				for (int r = 0; r < runs; ++r) {
+					options.parity = r % 2;
 					last = run_hang(sizes[s], &options);
 					times[r] = last.ms_per_frame;
+					seconds_on += last.seconds_on;
+					seconds_off += last.seconds_off;
+					frames_on += last.frames_on;
+					frames_off += last.frames_off;
 				}
 #ifdef PLAIT_BENCH_HAVE_POOL
 				plait_thread_pool_destroy(options.pool);
@@ -378,6 +456,11 @@ int main(int argc, char **argv)
 				    options.substeps > 0 ? options.substeps : plait_default_world_def().substeps, threads,
 				    options.frames, times[runs / 2], last.strain_max, last.strain_p99, last.strain_mean,
 				    last.bytes_per_vertex, last.nonfinite);
+				if (options.alternate != 0 && frames_on > 0 && frames_off > 0) {
+					double on = 1000.0 * seconds_on / frames_on, off = 1000.0 * seconds_off / frames_off;
+					printf("scene=hang-%d threads=%d alternate=%s ms_on=%.3f ms_off=%.3f on_over_off=%.4f\n",
+					       sizes[s], threads, alternate_names[options.alternate], on, off, on / off);
+				}
 				if (options.strain_window > 0) {
 					printf("scene=hang-%d strain_window=%d window_max=%.4f window_p99=%.4f\n", sizes[s],
 					       options.strain_window, last.window_max, last.window_p99);
