@@ -354,6 +354,25 @@ static plait_vec3 *tethered_positions(int worker_count, int *count)
 	return x;
 }
 
+/* A bouncy, sticky sphere and a capsule under a 2 m cloth hung at y = 0. */
+static void add_round_colliders(plait_world_id world)
+{
+	plait_error error = {0};
+	plait_collider_def sphere = plait_default_collider_def();
+	sphere.shape = PLAIT_SHAPE_SPHERE;
+	sphere.center = (plait_vec3){0.2f, -0.6f, 0.3f};
+	sphere.radius = 0.5f;
+	sphere.surface.bounce = 0.4f;
+	sphere.surface.stickiness = 0.3f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
+	plait_collider_def capsule = plait_default_collider_def();
+	capsule.shape = PLAIT_SHAPE_CAPSULE;
+	capsule.a = (plait_vec3){-0.8f, -0.9f, -0.2f};
+	capsule.b = (plait_vec3){0.6f, -0.7f, 0.4f};
+	capsule.radius = 0.2f;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &capsule, &error)), "%s", error.message);
+}
+
 /* A cloth tethered to three pins (rows of two and of three tethers), meeting a sticky, bouncy
  * sphere, a capsule and a floor with its vertices (colliders met forward and back), stepped
  * with the substeps' closing tethers and collisions folded into the last particle pass
@@ -383,19 +402,7 @@ static plait_vec3 *closing_pass_positions(int worker_count, bool fold, bool movi
 	cloth.pin_count = 3;
 	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
-	plait_collider_def sphere = plait_default_collider_def();
-	sphere.shape = PLAIT_SHAPE_SPHERE;
-	sphere.center = (plait_vec3){0.2f, -0.6f, 0.3f};
-	sphere.radius = 0.5f;
-	sphere.surface.bounce = 0.4f;
-	sphere.surface.stickiness = 0.3f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
-	plait_collider_def capsule = plait_default_collider_def();
-	capsule.shape = PLAIT_SHAPE_CAPSULE;
-	capsule.a = (plait_vec3){-0.8f, -0.9f, -0.2f};
-	capsule.b = (plait_vec3){0.6f, -0.7f, 0.4f};
-	capsule.radius = 0.2f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &capsule, &error)), "%s", error.message);
+	add_round_colliders(world);
 	plait_collider_def floor = plait_default_collider_def();
 	floor.shape = PLAIT_SHAPE_PLANE;
 	floor.point = (plait_vec3){0.0f, -1.2f, 0.0f};
@@ -472,19 +479,7 @@ static plait_vec3 *column_close_positions(int worker_count, bool on_columns, lon
 	cloth.pin_count = 2;
 	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
-	plait_collider_def sphere = plait_default_collider_def();
-	sphere.shape = PLAIT_SHAPE_SPHERE;
-	sphere.center = (plait_vec3){0.2f, -0.6f, 0.3f};
-	sphere.radius = 0.5f;
-	sphere.surface.bounce = 0.4f;
-	sphere.surface.stickiness = 0.3f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &sphere, &error)), "%s", error.message);
-	plait_collider_def capsule = plait_default_collider_def();
-	capsule.shape = PLAIT_SHAPE_CAPSULE;
-	capsule.a = (plait_vec3){-0.8f, -0.9f, -0.2f};
-	capsule.b = (plait_vec3){0.6f, -0.7f, 0.4f};
-	capsule.radius = 0.2f;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &capsule, &error)), "%s", error.message);
+	add_round_colliders(world);
 	cr_assert(test_step_frames(world, 20));
 	*closed = world.world->sim.closed_on_columns;
 	*columns_used = world.world->sim.use_columns && world.world->sim.simd == PLAIT_SIMD_AVX512;
