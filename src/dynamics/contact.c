@@ -1219,13 +1219,13 @@ static void collide_collider_range_on_columns(collider_job *job, const plait_col
 		int size = end - chunk < CULL_CHUNK ? end - chunk : CULL_CHUNK, whole = size & ~15;
 		int count = plait_cull_columns_avx512(p, columns, &bounds, chunk, whole, near);
 		for (int i = chunk + whole; i < chunk + size; ++i) {
-			p->point[i] = (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+			p->point[i] = plait_column_point(columns, i);
 		}
 		count += cull_particles(job, p, chunk + whole, size - whole, near + count);
 		int batch_count = 0;
 		for (int k = 0; k < count; ++k) {
 			int i = near[k];
-			p->point[i] = (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+			p->point[i] = plait_column_point(columns, i);
 			contacts += collide_particle(job, i, batch, &batch_count);
 		}
 		/* Each particle's result is its own, whichever batch it is solved in. */
@@ -1234,9 +1234,7 @@ static void collide_collider_range_on_columns(collider_job *job, const plait_col
 		}
 		for (int k = 0; k < count; ++k) {
 			int i = near[k];
-			columns->x[i] = p->point[i].x.x;
-			columns->y[i] = p->point[i].x.y;
-			columns->z[i] = p->point[i].x.z;
+			plait_column_set(columns, i, p->point[i].x);
 		}
 	}
 	atomic_fetch_add_explicit(&job->contacts, contacts, memory_order_relaxed);

@@ -31,10 +31,7 @@ static inline __attribute__((always_inline)) int cull(const plait_particles *p, 
 		}
 		__m512 bx, by, bz, w, ax, ay, az;
 		if (columns != NULL) {
-			bx = _mm512_loadu_ps(columns->x + i);
-			by = _mm512_loadu_ps(columns->y + i);
-			bz = _mm512_loadu_ps(columns->z + i);
-			w = _mm512_loadu_ps(columns->w + i);
+			load_columns16(columns, i, &bx, &by, &bz, &w);
 		} else {
 			load_points16(p->point, i, &bx, &by, &bz, &w);
 		}

@@ -33,10 +33,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	for (; i + 16 <= end; i += 16) {
 		__m512 x, y, z, w;
 		if (columns != NULL) {
-			x = _mm512_loadu_ps(columns->x + i);
-			y = _mm512_loadu_ps(columns->y + i);
-			z = _mm512_loadu_ps(columns->z + i);
-			w = _mm512_loadu_ps(columns->w + i);
+			load_columns16(columns, i, &x, &y, &z, &w);
 		} else {
 			load_points16(p->point, i, &x, &y, &z, &w);
 		}
@@ -127,9 +124,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 			z = _mm512_load_ps(lz);
 		}
 		if (columns != NULL) {
-			_mm512_storeu_ps(columns->x + i, x);
-			_mm512_storeu_ps(columns->y + i, y);
-			_mm512_storeu_ps(columns->z + i, z);
+			store_columns16(columns, i, x, y, z);
 		} else {
 			store_points16(p->point, i, x, y, z, w);
 		}
@@ -137,7 +132,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 	for (; i < end; ++i) {
 		/* The last few (fewer than 16) through the point array: the portable operations. */
 		if (columns != NULL) {
-			p->point[i] = (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+			p->point[i] = plait_column_point(columns, i);
 		}
 		if (ending) {
 			plait_end_particle(k, p, i);
@@ -146,9 +141,7 @@ static inline __attribute__((always_inline)) void step_range(const plait_particl
 			plait_begin_particle(k, p, i);
 		}
 		if (columns != NULL) {
-			columns->x[i] = p->point[i].x.x;
-			columns->y[i] = p->point[i].x.y;
-			columns->z[i] = p->point[i].x.z;
+			plait_column_set(columns, i, p->point[i].x);
 		}
 	}
 	_mm256_zeroupper();

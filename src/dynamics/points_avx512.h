@@ -145,4 +145,22 @@ static inline void store_vec3x16(vec3 *to, __m512 x, __m512 y, __m512 z)
 	_mm512_storeu_ps(f + 32, _mm512_permutex2var_ps(_mm512_permutex2var_ps(x, c_xy, y), c_z, z));
 }
 
+/* Sixteen consecutive points of the columns (solver.c, "Columns") into a register per
+ * coordinate, and their positions back (w does not change in a frame). */
+static inline void load_columns16(const plait_columns *columns, int first, __m512 *x, __m512 *y, __m512 *z,
+                                  __m512 *w)
+{
+	*x = _mm512_loadu_ps(columns->x + first);
+	*y = _mm512_loadu_ps(columns->y + first);
+	*z = _mm512_loadu_ps(columns->z + first);
+	*w = _mm512_loadu_ps(columns->w + first);
+}
+
+static inline void store_columns16(const plait_columns *columns, int first, __m512 x, __m512 y, __m512 z)
+{
+	_mm512_storeu_ps(columns->x + first, x);
+	_mm512_storeu_ps(columns->y + first, y);
+	_mm512_storeu_ps(columns->z + first, z);
+}
+
 #endif

@@ -147,6 +147,19 @@ struct plait_columns {
 	plait_column_kernel *project;
 };
 
+/* Point i of the columns, and its position written back (w does not change in a frame). */
+static inline plait_point plait_column_point(const plait_columns *columns, int i)
+{
+	return (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
+}
+
+static inline void plait_column_set(const plait_columns *columns, int i, vec3 x)
+{
+	columns->x[i] = x.x;
+	columns->y[i] = x.y;
+	columns->z[i] = x.z;
+}
+
 /* A level's column kernel and its copies of the points into columns and back (NULL: none). */
 typedef struct plait_column_ops {
 	plait_column_kernel *project;

@@ -781,13 +781,6 @@ static int others_bound(const plait_tether_block *others, int key)
 	return first;
 }
 
-#if PLAIT_X86_KERNELS
-static plait_point point_of(const plait_columns *columns, int i)
-{
-	return (plait_point){{columns->x[i], columns->y[i], columns->z[i]}, columns->w[i]};
-}
-#endif
-
 bool plait_tethers_on_columns(const plait_tether_block *block)
 {
 	return block->count == 0 || (plait_tethers_by_particle(block) && block->lanes->others.count == 0);
@@ -805,7 +798,8 @@ void plait_solve_tethers_of_particles_on_columns(plait_tether_block *block, cons
 		const tether_run *run = &lanes->runs[r];
 		int first = lower_bound(lanes->particle, run->begin, run->end, begin);
 		int last = lower_bound(lanes->particle, first, run->end, end);
-		vec3 a0 = point_of(columns, run->anchor[0]).x, a1 = point_of(columns, run->anchor[1]).x;
+		vec3 a0 = plait_column_point(columns, run->anchor[0]).x,
+		     a1 = plait_column_point(columns, run->anchor[1]).x;
 		for (int b = first; b < last; b += LANE_BATCH) {
 			int count = last - b < LANE_BATCH ? last - b : LANE_BATCH;
 			int unfound[LANE_BATCH];
@@ -815,14 +809,13 @@ void plait_solve_tethers_of_particles_on_columns(plait_tether_block *block, cons
 			/* The exact search on copies of the row's three points (the anchors are pinned). */
 			for (int m = 0; m < missing; ++m) {
 				int row = b + unfound[m], i = lanes->particle[row];
-				plait_point three[3] = {point_of(columns, i), point_of(columns, run->anchor[0]),
-				                        point_of(columns, run->anchor[1])};
+				plait_point three[3] = {plait_column_point(columns, i),
+				                        plait_column_point(columns, run->anchor[0]),
+				                        plait_column_point(columns, run->anchor[1])};
 				const int anchors[2] = {1, 2};
 				project_pair_exactly(three, 0, anchors, lanes->length[0][row], lanes->length[1][row],
 				                     run->stiffness);
-				columns->x[i] = three[0].x.x;
-				columns->y[i] = three[0].x.y;
-				columns->z[i] = three[0].x.z;
+				plait_column_set(columns, i, three[0].x);
 			}
 		}
 	}

@@ -92,10 +92,7 @@ static inline __attribute__((always_inline)) void load_rows(const plait_point *p
 		return;
 	}
 	if (run) {
-		*x = _mm512_loadu_ps(columns->x + first);
-		*y = _mm512_loadu_ps(columns->y + first);
-		*z = _mm512_loadu_ps(columns->z + first);
-		*w = _mm512_loadu_ps(columns->w + first);
+		load_columns16(columns, first, x, y, z, w);
 		return;
 	}
 	__m512i lanes = _mm512_loadu_si512((const void *)index);
@@ -121,9 +118,7 @@ static inline __attribute__((always_inline)) void store_rows(plait_point *points
 		return;
 	}
 	if (run) {
-		_mm512_storeu_ps(columns->x + first, x);
-		_mm512_storeu_ps(columns->y + first, y);
-		_mm512_storeu_ps(columns->z + first, z);
+		store_columns16(columns, first, x, y, z);
 		return;
 	}
 	_Alignas(64) float lx[16], ly[16], lz[16];
@@ -131,9 +126,7 @@ static inline __attribute__((always_inline)) void store_rows(plait_point *points
 	_mm512_store_ps(ly, y);
 	_mm512_store_ps(lz, z);
 	for (int k = 0; k < count; ++k) {
-		columns->x[index[k]] = lx[k];
-		columns->y[index[k]] = ly[k];
-		columns->z[index[k]] = lz[k];
+		plait_column_set(columns, index[k], v3(lx[k], ly[k], lz[k]));
 	}
 }
 
