@@ -26,20 +26,22 @@
  * a pool of K workers (tools/plait/thread_pool.h, the calling thread included) to the world's
  * task hooks. It needs the tool layer (plait_toollib); without it only 1 is accepted.
  *
- * --alternate SWITCH (fold, close or columns) times two of the solver's paths that give the same
+ * --alternate SWITCH (fold, close, columns or wave) times two of the solver's paths that give the same
  * bits side by side in each run, switching between them frame by frame: the host's drift then
  * falls on both alike (separate runs on a shared host swing by 15%; session 19 in
  * docs/performance.md). It reaches into the library's internals (world/world.h) for the switch:
  *   fold     the substeps' closing tethers and collisions folded into the last particle pass, or not;
  *   close    that close on the points as columns, or on the point array;
- *   columns  the distance kernel on the points as columns, or on the point array.
+ *   columns  the distance kernel on the points as columns, or on the point array;
+ *   wave     the frame as one wave down the regions (dynamics/wave.h), or pass after pass.
  * Run r takes the path "on" in frames of parity r, so an even number of runs evens out frames
  * that cost more than their neighbours. Adds a line per size and thread count: each path's ms a
  * frame over all runs, and on / off.
  *
  * usage: bench_hang [N ...] [--material default|rigid|stiff|both] [--tethers none|euclidean|geodesic]
  *                   [--runs R] [--frames F] [--iterations I] [--substeps S] [--threads LIST]
- *                   [--simd auto|scalar|avx2|avx512] [--strain-window W] [--alternate fold|close|columns]
+ *                   [--simd auto|scalar|avx2|avx512] [--strain-window W] [--alternate
+ * fold|close|columns|wave]
  */
 #include <math.h>
 #include <stdio.h>
@@ -69,11 +71,11 @@ typedef struct hang_options {
 	plait_simd simd;
 	plait_tether_mode tethers;
 	plait_thread_pool *pool; /* NULL: one thread */
-	int alternate;           /* 0: no; 1 fold, 2 close, 3 columns */
+	int alternate;           /* 0: no; 1 fold, 2 close, 3 columns, 4 wave */
 	int parity;              /* frames with frame % 2 == parity take the path "on" */
 } hang_options;
 
-static const char *const alternate_names[4] = {"", "fold", "close", "columns"};
+static const char *const alternate_names[5] = {"", "fold", "close", "columns", "wave"};
 
 static double now_seconds(void)
 {
@@ -117,6 +119,10 @@ static bool set_switch(plait_world_id world, int alternate, bool on)
 			return sim->frame == 0;
 		}
 		sim->use_columns = on;
+		return true;
+	case 4:
+		/* (Whether frames took it is known after them: run_hang.) */
+		sim->wave_frames = on;
 		return true;
 	default:
 		return true;
@@ -294,6 +300,10 @@ static hang_result run_hang(int n, const hang_options *options)
 			result.window_p99 = now.strain_p99 > result.window_p99 ? now.strain_p99 : result.window_p99;
 		}
 	}
+	if (options->alternate == 4 && world.world->sim.waved_frames == 0) {
+		fprintf(stderr, "bench_hang: --alternate wave: this run cannot take that path\n");
+		exit(1);
+	}
 	result.ms_per_frame = 1000.0 * stepping_seconds / options->frames;
 	result.bytes_per_vertex = allocated_bytes / (size_t)vertex_count;
 
@@ -361,11 +371,11 @@ int main(int argc, char **argv)
 		} else if (strcmp(argv[a], "--alternate") == 0 && a + 1 < argc) {
 			++a;
 			options.alternate = 0;
-			for (int k = 1; k < 4; ++k) {
+			for (int k = 1; k < 5; ++k) {
 				options.alternate = strcmp(argv[a], alternate_names[k]) == 0 ? k : options.alternate;
 			}
 			if (options.alternate == 0) {
-				fprintf(stderr, "bench_hang: --alternate expects fold, close or columns, got '%s'\n",
+				fprintf(stderr, "bench_hang: --alternate expects fold, close, columns or wave, got '%s'\n",
 				        argv[a]);
 				return 2;
 			}

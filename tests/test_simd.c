@@ -118,7 +118,7 @@ static void check_kernels(block_maker *make, int count, int point_count, int spl
 		unsigned char *layouts = calloc((size_t)count, 1);
 		plait_segment *segments = calloc((size_t)count, sizeof *segments);
 		if (keep_layouts || columns) {
-			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0};
+			block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0, 0, NULL};
 			plait_find_batch_layouts(&block, layouts);
 			block.colouring.batch_layout = layouts;
 			block.colouring.segment_count = plait_find_segments(&block, segments);
@@ -354,7 +354,7 @@ Test(simd, each_batch_is_found_in_the_layout_it_was_laid_out_in)
 	}
 	/* Kept per position: batches start a multiple of 16 (8) after their run's start. */
 	int run_start[3] = {0, FILLERS, count}, region_start[2] = {0, 2};
-	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0};
+	block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0, 0, NULL};
 	unsigned char *kept = malloc((size_t)count);
 	memset(kept, 0xff, (size_t)count);
 	plait_find_batch_layouts(&block, kept);
@@ -399,7 +399,7 @@ Test(simd, segments_are_found_in_the_layouts_they_lie_in)
 			block.point_offset[c][1] = first;
 		}
 		int run_start[3] = {0, FILLERS, count}, region_start[2] = {0, 2};
-		block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0};
+		block.colouring = (plait_colouring){1, 2, region_start, run_start, NULL, NULL, 0, 0, NULL};
 		plait_segment *segments = calloc((size_t)count, sizeof *segments);
 		int found = plait_find_segments(&block, segments);
 		cr_assert_eq(plait_find_segments(&block, NULL), found);

@@ -14,6 +14,7 @@ void plait_colouring_clear(plait_colouring *colouring, const plait_allocator *al
 	plait_free(allocator, colouring->run_start);
 	plait_free(allocator, colouring->batch_layout);
 	plait_free(allocator, colouring->segments);
+	plait_free(allocator, colouring->boundary_cut_start);
 	memset(colouring, 0, sizeof *colouring);
 }
 
@@ -84,6 +85,77 @@ static void colour_list(colouring_state *state, const int *list, int n, int slab
 	}
 }
 
+/* The boundary of a coloured block, banded when it can be (colouring.h): each constraint
+ * between two adjacent regions, and no particle held by constraints of two cuts. Sorts each
+ * boundary run by cut (its constraints share no particle, so their order in it changes
+ * nothing) and returns the runs' cut starts, or NULL (not banded, or out of memory). */
+static int *band_boundary(const plait_allocator *allocator, const int *vertices, int arity,
+                          int particle_count, int *order, plait_colouring *colouring)
+{
+	int regions = colouring->region_count;
+	int first_run = colouring->region_start[regions], runs = colouring->run_count - first_run;
+	if (regions < 2 || runs <= 0) {
+		return NULL;
+	}
+	int first = colouring->run_start[first_run], count = colouring->run_start[colouring->run_count] - first;
+	int *cut_of = plait_alloc(allocator, sizeof(int) * (size_t)count);
+	int *sorted = plait_alloc(allocator, sizeof(int) * (size_t)count);
+	int *held_by = plait_alloc(allocator, sizeof(int) * (size_t)particle_count);
+	int *starts = plait_alloc(allocator, sizeof(int) * ((size_t)runs * (size_t)regions + 1));
+	bool banded = cut_of != NULL && sorted != NULL && held_by != NULL && starts != NULL;
+	for (int i = 0; banded && i < particle_count; ++i) {
+		held_by[i] = -1;
+	}
+	for (int k = 0; banded && k < count; ++k) {
+		const int *tuple = vertices + (size_t)order[first + k] * (size_t)arity;
+		int low = INT_MAX, high = -1;
+		for (int a = 0; a < arity; ++a) {
+			int region = (int)((int64_t)tuple[a] * regions / particle_count);
+			low = region < low ? region : low;
+			high = region > high ? region : high;
+		}
+		banded = high == low + 1;
+		for (int a = 0; banded && a < arity; ++a) {
+			banded = held_by[tuple[a]] < 0 || held_by[tuple[a]] == low;
+			held_by[tuple[a]] = low;
+		}
+		cut_of[k] = low;
+	}
+	/* Each run by cut, stably: a counting sort. */
+	for (int m = 0; banded && m < runs; ++m) {
+		int begin = colouring->run_start[first_run + m] - first,
+		    end = colouring->run_start[first_run + m + 1] - first;
+		int *cut_start = starts + (size_t)m * (size_t)regions;
+		for (int c = 0; c < regions; ++c) {
+			cut_start[c] = 0;
+		}
+		for (int k = begin; k < end; ++k) {
+			cut_start[cut_of[k] + 1] += 1;
+		}
+		cut_start[0] = first + begin;
+		for (int c = 1; c < regions; ++c) {
+			cut_start[c] += cut_start[c - 1];
+		}
+		int next[PLAIT_MAX_REGIONS];
+		memcpy(next, cut_start, sizeof(int) * (size_t)regions);
+		for (int k = begin; k < end; ++k) {
+			sorted[next[cut_of[k]]++ - first] = order[first + k];
+		}
+		memcpy(order + first + begin, sorted + begin, sizeof(int) * (size_t)(end - begin));
+	}
+	if (banded) {
+		starts[(size_t)runs * (size_t)regions] = first + count;
+	}
+	plait_free(allocator, cut_of);
+	plait_free(allocator, sorted);
+	plait_free(allocator, held_by);
+	if (!banded) {
+		plait_free(allocator, starts);
+		return NULL;
+	}
+	return starts;
+}
+
 bool plait_colour_constraints(const plait_allocator *allocator, const int *vertices, int arity, int count,
                               int particle_count, int *order, plait_colouring *colouring)
 {
@@ -146,6 +218,9 @@ bool plait_colour_constraints(const plait_allocator *allocator, const int *verti
 		colouring->run_count = state.runs;
 		colouring->region_start = region_start;
 		colouring->run_start = run_start;
+		colouring->particle_count = particle_count;
+		colouring->boundary_cut_start =
+		    band_boundary(allocator, vertices, arity, particle_count, order, colouring);
 	} else {
 		plait_free(allocator, run_start);
 		plait_free(allocator, region_start);

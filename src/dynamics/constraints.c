@@ -104,6 +104,28 @@ void plait_solve_distance(plait_distance_block *block, plait_particles *particle
 	}
 }
 
+void plait_distance_sweep_region(plait_distance_block *block, const plait_columns *columns, int region,
+                                 float inverse_h_squared, plait_sweep sweep)
+{
+	distance_job job = {NULL, block, NULL, columns, inverse_h_squared, sweep};
+	distance_regions(&job, region, region + 1);
+}
+
+void plait_distance_sweep_cut(plait_distance_block *block, const plait_columns *columns, int cut,
+                              float inverse_h_squared, bool backward)
+{
+	distance_job job = {NULL, block, NULL, columns, inverse_h_squared, PLAIT_SWEEP_FORWARD};
+	const plait_colouring *colouring = &block->colouring;
+	int regions = colouring->region_count, runs = colouring->run_count - colouring->region_start[regions];
+	for (int m = 0; m < runs; ++m) {
+		const int *cut_start =
+		    colouring->boundary_cut_start + (size_t)(backward ? runs - 1 - m : m) * (size_t)regions;
+		if (cut_start[cut] < cut_start[cut + 1]) {
+			distance_range(&job, cut_start[cut], cut_start[cut + 1]);
+		}
+	}
+}
+
 /* With e = p1 - p0, nA = e x (p2 - p0) and nB = (p0 - p1) x (p3 - p1) (the normals of the
  * triangles (p0,p1,p2) and (p1,p0,p3), equal when flat and consistently oriented), the angle
  * is atan2((nA x nB).e, nA.nB): the rotation about e taking nA to nB. Turning a wing about

@@ -56,6 +56,14 @@ static inline plait_sweep plait_sweep_for(int iteration, int count, int substep,
 void plait_solve_distance(plait_distance_block *block, plait_particles *particles,
                           const plait_columns *columns, float inverse_h_squared, plait_sweep sweep,
                           plait_distance_kernel *kernel, plait_parallel *parallel);
+/* The parts of a distance sweep on columns for a wave down the regions (dynamics/wave.h):
+ * region `region` swept as plait_solve_distance sweeps it, and the boundary constraints of cut
+ * `cut` (between regions cut and cut + 1; the block's boundary banded, colouring.h), run after
+ * run, or backward the other way. */
+void plait_distance_sweep_region(plait_distance_block *block, const plait_columns *columns, int region,
+                                 float inverse_h_squared, plait_sweep sweep);
+void plait_distance_sweep_cut(plait_distance_block *block, const plait_columns *columns, int cut,
+                              float inverse_h_squared, bool backward);
 void plait_solve_bend(plait_bend_block *block, plait_particles *particles, float inverse_h_squared,
                       plait_bend_kernel *kernel, plait_parallel *parallel);
 /* Unilateral: only a tether longer than its length is pulled in, by its stiffness share. With

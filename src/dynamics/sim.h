@@ -134,6 +134,13 @@ typedef struct plait_colouring {
 	/* Distance blocks: the segments of the column kernel (dynamics/batch_layout.h), or NULL. */
 	struct plait_segment *segments;
 	int segment_count;
+	/* The particle count the regions were cut for: region r holds the particles i with
+	 * i * region_count / particle_count == r. */
+	int particle_count;
+	/* Distance blocks whose boundary is banded (colouring.h, "Bands"), or NULL: each boundary
+	 * run's constraints sorted by cut, those of cut c (between regions c and c + 1) in run m being
+	 * [boundary_cut_start[m * region_count + c], boundary_cut_start[m * region_count + c + 1]). */
+	int *boundary_cut_start;
 } plait_colouring;
 
 /* The points as columns (plait_sim.column_x and the rest), for the column kernels
@@ -218,8 +225,11 @@ typedef struct plait_tether_block {
 	/* Per tether, but the same for all of a cloth's (world/tethers.c): the solver takes a
 	 * particle's tethers together with the first one's (tether.c). */
 	float *stiffness;
-	bool fixed_anchors;               /* every anchor pinned: set at each frame's start (plait_sim_step) */
-	bool still_anchors;               /* and none moves in the frame (its point is its pin's start and end) */
+	bool fixed_anchors; /* every anchor pinned: set at each frame's start (plait_sim_step) */
+	bool still_anchors; /* and none moves in the frame (its point is its pin's start and end) */
+	/* And no anchor coordinate is -0, the one value a distance projection changes on a pinned
+	 * point (-0 - -0 is +0): each anchor's bits then hold through the frame (wave.h). */
+	bool anchors_keep_bits;
 	bool lanes_stale;                 /* pair[] changed since `lanes` was derived from it */
 	struct plait_tether_lanes *lanes; /* the solver's regrouping (tether.c); NULL until derived */
 } plait_tether_block;
@@ -347,6 +357,10 @@ typedef struct plait_sim {
 	 * but for tests comparing the two. */
 	bool close_on_columns;
 	long long closed_on_columns; /* substeps whose close ran on columns (for tests) */
+	/* Run a frame as one wave down the regions when it allows it (solver.c, "Waves"); always on
+	 * but for tests and benchmarks comparing the two. */
+	bool wave_frames;
+	long long waved_frames; /* frames that ran as a wave, since the sim was made (for tests) */
 
 	/* Scratch of the particle-pair stage (spatial hash and contacts). */
 	bool particle_pairs_active;

@@ -30,6 +30,7 @@ void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
 	sim->schedule_dirty = true;
 	sim->fold_closing_passes = true;
 	sim->close_on_columns = true;
+	sim->wave_frames = true;
 }
 
 #define FREE_FIELD(object, field) plait_free(&sim->allocator, (object).field)

@@ -13,6 +13,7 @@
 #include "dynamics/contact.h"
 #include "dynamics/mesh_contact.h"
 #include "dynamics/particle_step.h"
+#include "dynamics/wave.h"
 
 const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "tether", "collision"};
 
@@ -301,6 +302,179 @@ static bool closes_foldably(const plait_sim *sim, const int *in_substep, int fir
 	       in_substep[collision] == 1 && plait_tethers_by_particle(&sim->tether);
 }
 
+/* Waves. Where a frame is only distance sweeps and folded closes on columns, on one or two
+ * threads, it runs as one wave down the regions (wave.h): each region's points and constraints
+ * serve every pass of the frame while they are in cache, instead of coming from memory once a
+ * pass when the cloth's data overflows the cache. The same operations on the same values in an
+ * order that keeps every particle's, so the bits are the same (test_threads,
+ * a_wave_gives_the_passes_bits). */
+
+/* The distance block an event of `kind` projects, or NULL: another kind, or bend with
+ * dihedral or rod bends (not distance constraints). */
+static plait_distance_block *distance_block_of(plait_sim *sim, int kind)
+{
+	switch (kind) {
+	case PLAIT_KIND_STRETCH:
+		return &sim->stretch;
+	case PLAIT_KIND_SHEAR:
+		return &sim->shear;
+	case PLAIT_KIND_BEND:
+		return sim->bend.count == 0 && sim->rod_bend.count == 0 ? &sim->bend_distance : NULL;
+	default:
+		return NULL;
+	}
+}
+
+/* Colliders that stay put over the frame, in the shapes whose pass reads nothing of the substep:
+ * closes of different substeps run at once. */
+static bool colliders_keep_still(const plait_sim *sim)
+{
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (c->collide && (c->shape.type == PLAIT_SHAPE_MESH || c->mesh_end != NULL ||
+		                   memcmp(&c->transform_start, &c->transform_end, sizeof c->transform_start) != 0)) {
+			return false;
+		}
+	}
+	return true;
+}
+
+/* The frame's slots into *wave when it can run as a wave, after substep 0's start (its collider
+ * pass in *colliders, folded: fold). */
+static bool plan_wave(plait_sim *sim, plait_wave *wave, const plait_collider_pass *colliders, bool fold,
+                      bool air)
+{
+	int n = sim->particles.count, substeps = sim->settings.substeps;
+	if (!sim->wave_frames || !fold || air || sim->parallel.worker_count > 1 || sim->particle_pairs_active ||
+	    sim->mesh_contacts_active || sim->pair_contact_count != 0 || sim->simd != PLAIT_SIMD_AVX512 ||
+	    !sim->close_on_columns || !sim->use_columns || sim->columns_capacity < n ||
+	    !plait_tethers_on_columns(&sim->tether) || !sim->tether.anchors_keep_bits ||
+	    !plait_collider_pass_on_columns(colliders) || !colliders_keep_still(sim)) {
+		return false;
+	}
+	const plait_schedule *schedule = &sim->schedule;
+	int regions = 0, count = 0;
+	for (int s = 0; s < substeps; ++s) {
+		int first = schedule->substep_start[s], last = schedule->substep_start[s + 1];
+		int in_substep[PLAIT_KIND_COUNT] = {0}, seen[PLAIT_KIND_COUNT] = {0};
+		for (int e = first; e < last; ++e) {
+			in_substep[schedule->events[e]] += 1;
+		}
+		if (!closes_foldably(sim, in_substep, first, last, air)) {
+			return false;
+		}
+		for (int e = first; e < last - 2; ++e) {
+			int k = schedule->events[e], kind = sim->schedule_kinds[k];
+			plait_distance_block *block = distance_block_of(sim, kind);
+			if (block == NULL || count == PLAIT_WAVE_MAX_SLOTS) {
+				return false;
+			}
+			plait_sweep sweep = plait_sweep_for(seen[k]++, in_substep[k], s, kind == PLAIT_KIND_STRETCH);
+			if (block->count == 0) {
+				continue;
+			}
+			regions = regions == 0 ? block->colouring.region_count : regions;
+			if (!plait_wave_takes(block, regions, n)) {
+				return false;
+			}
+			wave->slots[count++] = (plait_wave_slot){block, sweep, s};
+		}
+		if (count == PLAIT_WAVE_MAX_SLOTS) {
+			return false;
+		}
+		wave->slots[count++] = (plait_wave_slot){NULL, PLAIT_SWEEP_FORWARD, s};
+	}
+	wave->slot_count = count;
+	wave->regions = regions;
+	wave->particle_count = n;
+	return regions >= 2;
+}
+
+typedef struct wave_frame {
+	plait_sim *sim;
+	folded_job closes[PLAIT_WAVE_MAX_SLOTS]; /* one a substep */
+} wave_frame;
+
+static void wave_enter(void *context, int begin, int end)
+{
+	wave_frame *frame = context;
+	to_columns_range(frame->sim, begin, end);
+}
+
+static void wave_close(void *context, int substep, int begin, int end)
+{
+	wave_frame *frame = context;
+	folded_range_on_columns(&frame->closes[substep], begin, end);
+}
+
+static void wave_leave(void *context, int begin, int end)
+{
+	wave_frame *frame = context;
+	from_columns_range(frame->sim, begin, end);
+}
+
+/* The frame as the wave planned (plan_wave), substep 0 begun: what run_substeps does for every
+ * substep, with the passes run by plait_wave_run. */
+static plait_result run_wave_frame(plait_sim *sim, plait_wave *wave, const particle_job *job,
+                                   plait_collider_pass *colliders, float inverse_h_squared,
+                                   plait_error *error)
+{
+	int substeps = sim->settings.substeps;
+	/* The later substeps' contact set-up: with no particle pairs and no mesh contacts it reads
+	 * nothing the substeps change. */
+	double contacts_start = plait_seconds();
+	for (int s = 1; s < substeps; ++s) {
+		if (!plait_contacts_begin_substep(sim)) {
+			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
+			                       "out of memory in the collision stage; the frame was not advanced");
+		}
+	}
+	sim->collision_seconds += plait_seconds() - contacts_start;
+	wave_frame storage, *frame = &storage;
+	frame->sim = sim;
+	for (int s = 0; s < substeps; ++s) {
+		bool beginning = s + 1 < substeps;
+		folded_job *close = &frame->closes[s];
+		*close = (folded_job){*job, beginning, true, colliders, 0};
+		close->step.t_end = beginning ? (float)(s + 2) / (float)substeps : (float)(s + 1) / (float)substeps;
+	}
+	plait_columns columns = columns_of(sim);
+	wave->columns = &columns;
+	wave->inverse_h_squared = inverse_h_squared;
+	wave->enter = wave_enter;
+	wave->close = wave_close;
+	wave->leave = wave_leave;
+	wave->context = frame;
+	plait_wave_run(wave);
+	sim->in_columns = false;
+
+	long long collide_ns = 0;
+	for (int o = 0; o < wave->slot_count; ++o) {
+		const plait_wave_slot *slot = &wave->slots[o];
+		if (slot->block != NULL) {
+			sim->constraint_solves += (slot->sweep == PLAIT_SWEEP_SYMMETRIC ? 2 : 1) * slot->block->count;
+		}
+	}
+	for (int s = 0; s < substeps; ++s) {
+		sim->substep = s;
+		sim->folded_substeps += 1;
+		sim->closed_on_columns += 1;
+		sim->constraint_solves += sim->tether.count;
+		collide_ns += atomic_load_explicit(&frame->closes[s].collide_ns, memory_order_relaxed);
+		if (s + 1 < substeps) {
+			plait_colliders_begin_substep(sim, (float)(s + 1) / (float)substeps,
+			                              (float)(s + 2) / (float)substeps);
+		} else {
+			plait_contacts_end_substep(sim);
+		}
+	}
+	/* One pass served every substep (the colliders stay put): its contacts are the frame's. */
+	plait_collider_pass_end(sim, colliders);
+	sim->collision_seconds += 1e-9 * (double)collide_ns / (double)sim->parallel.worker_count;
+	sim->waved_frames += 1;
+	return PLAIT_OK;
+}
+
 static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, plait_sweep sweep)
 {
 	int sweeps = sweep == PLAIT_SWEEP_SYMMETRIC ? 2 : 1;
@@ -500,6 +674,12 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		plait_collider_pass colliders;
 		bool fold =
 		    closes_foldably(sim, in_substep, first, last, air) && plait_collider_pass_begin(sim, &colliders);
+		if (s == 0) {
+			plait_wave wave;
+			if (plan_wave(sim, &wave, &colliders, fold, air)) {
+				return run_wave_frame(sim, &wave, &job, &colliders, inverse_h_squared, error);
+			}
+		}
 		for (int e = first; e < last - (fold ? 2 : 0); ++e) {
 			int k = schedule->events[e];
 			plait_sweep sweep =

@@ -705,16 +705,19 @@ void plait_tethers_begin_frame(plait_tether_block *block, const plait_particles 
 	 * distinct anchors is checked instead of every tether's. */
 	const plait_tether_lanes *lanes = block->lanes_stale ? NULL : block->lanes;
 	int checks = lanes != NULL ? lanes->anchor_count : block->count;
-	bool fixed_anchors = true, still_anchors = true;
+	bool fixed_anchors = true, still_anchors = true, negative_zero = false;
 	for (int c = 0; c < checks && fixed_anchors; ++c) {
 		int anchor = lanes != NULL ? lanes->anchors[c] : block->pair[c][1];
 		fixed_anchors = particles->point[anchor].w == 0.0f;
 		/* Where it is, it stays over the frame (bit for bit: v3_lerp of equal ends is exact). */
 		vec3 x = particles->point[anchor].x, a = particles->pin_start[anchor], b = particles->pin_end[anchor];
 		still_anchors = still_anchors && memcmp(&x, &a, sizeof x) == 0 && memcmp(&a, &b, sizeof a) == 0;
+		negative_zero = negative_zero || (x.x == 0.0f && signbit(x.x)) || (x.y == 0.0f && signbit(x.y)) ||
+		                (x.z == 0.0f && signbit(x.z));
 	}
 	block->fixed_anchors = fixed_anchors;
 	block->still_anchors = fixed_anchors && still_anchors;
+	block->anchors_keep_bits = block->still_anchors && !negative_zero;
 	if (block->lanes_stale || (fixed_anchors && block->lanes == NULL && block->count > 0)) {
 		block->lanes_stale = false;
 		if (!derive_lanes(block, particles->count, allocator)) {
