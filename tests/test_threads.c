@@ -520,6 +520,81 @@ Test(threads, a_close_on_columns_gives_the_point_arrays_bits, .timeout = 600)
 	free(points);
 }
 
+/* A rigid cloth (every kind at the maximum resistance, distance bends) hung from two pins by
+ * tethers onto a bouncy, sticky sphere and a capsule: stretch swept twice a substep (forward, then
+ * symmetric), shear and bend once (forward and backward in turn). 10,201 particles in 16 regions
+ * a block. With one worker the frame runs as one wave down the regions (dynamics/wave.h) unless
+ * `wave` is off; with more it never does. Positions, then velocities; *waved: frames run so. */
+static plait_vec3 *wave_positions(int worker_count, bool wave, long long *waved, int *count)
+{
+	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
+	plait_world_def wdef = plait_default_world_def();
+	wdef.substeps = 3;
+	wdef.max_collision_iterations = 3; /* once a substep: closes fold */
+	wdef.air_density = 0.0f;
+	plait_thread_pool_attach(pool, &wdef);
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	cr_assert(!plait_world_id_is_null(world));
+	world.world->sim.wave_frames = wave;
+	plait_error error = {0};
+	int n = 100;
+	test_grid grid = test_grid_make(n, n, 2.0f, 2.0f);
+	int pins[2] = {0, n};
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+	cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
+	cloth.iterations = 6;
+	cloth.shear_iterations = cloth.bend_iterations = 3;
+	cloth.bend_model = PLAIT_BEND_DISTANCE;
+	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
+	cloth.damp = 0.3f;
+	cloth.collision_flag = PLAIT_COLLIDE_VERTEX;
+	cloth.pins = pins;
+	cloth.pin_count = 2;
+	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
+	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
+	add_round_colliders(world);
+	cr_assert(test_step_frames(world, 30));
+	*waved = world.world->sim.waved_frames;
+	*count = grid.vertex_count;
+	plait_vec3 *both = malloc(sizeof *both * 2 * (size_t)*count);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, both, &error), PLAIT_OK, "%s", error.message);
+	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, *count, both + *count, &error), PLAIT_OK, "%s",
+	             error.message);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+	plait_thread_pool_destroy(pool);
+	return both;
+}
+
+Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
+{
+	long long waved = 0;
+	int count;
+	plait_vec3 *passes = wave_positions(1, false, &waved, &count);
+	cr_assert_eq(waved, 0);
+	plait_vec3 *waves = wave_positions(1, true, &waved, &count);
+	/* The wave projects on columns, which need the AVX-512 kernels. */
+	bool columns = plait_simd_is_supported(PLAIT_SIMD_AVX512);
+	cr_expect_eq(waved > 0, columns, "frames run as a wave: %lld", waved);
+	if (columns) {
+		cr_expect_eq(waved, 30, "frames run as a wave: %lld of 30", waved);
+	}
+	cr_expect(memcmp(waves, passes, sizeof *passes * 2 * (size_t)count) == 0,
+	          "the wave changes positions or velocities");
+	int workers[] = {2, 8};
+	for (size_t k = 0; k < sizeof workers / sizeof workers[0]; ++k) {
+		plait_vec3 *threaded = wave_positions(workers[k], true, &waved, &count);
+		cr_expect_eq(waved, 0, "a wave on %d workers", workers[k]);
+		cr_expect(memcmp(threaded, waves, sizeof *waves * 2 * (size_t)count) == 0,
+		          "%d workers give other positions or velocities than a wave on one", workers[k]);
+		free(threaded);
+	}
+	free(passes);
+	free(waves);
+}
+
 Test(threads, tethered_cloth_same_with_1_2_and_8_workers, .timeout = 600)
 {
 	int count1, count2, count8;
