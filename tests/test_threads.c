@@ -524,10 +524,10 @@ Test(threads, a_close_on_columns_gives_the_point_arrays_bits, .timeout = 600)
  * tethers onto a bouncy, sticky sphere and a capsule: stretch swept twice a substep (forward, then
  * symmetric), shear and bend once (forward and backward in turn). 10,201 particles in 16 regions
  * a block. With one worker the frame runs as one wave down the regions (dynamics/wave.h) unless
- * `wave` is off; with more it never does. Positions, then velocities; *waved: frames run so. */
-static plait_vec3 *wave_positions(int worker_count, bool wave, long long *waved, int *count)
+ * `wave` is off; with more it never does. */
+static plait_world_id wave_world(plait_thread_pool *pool, bool wave, test_grid *grid,
+                                 plait_object_id *cloth_id)
 {
-	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
 	plait_world_def wdef = plait_default_world_def();
 	wdef.substeps = 3;
 	wdef.max_collision_iterations = 3; /* once a substep: closes fold */
@@ -538,10 +538,10 @@ static plait_vec3 *wave_positions(int worker_count, bool wave, long long *waved,
 	world.world->sim.wave_frames = wave;
 	plait_error error = {0};
 	int n = 100;
-	test_grid grid = test_grid_make(n, n, 2.0f, 2.0f);
+	*grid = test_grid_make(n, n, 2.0f, 2.0f);
 	int pins[2] = {0, n};
 	plait_cloth_def cloth = plait_default_cloth_def();
-	cloth.mesh = test_grid_mesh(&grid);
+	cloth.mesh = test_grid_mesh(grid);
 	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
 	cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
 	cloth.iterations = 6;
@@ -552,14 +552,26 @@ static plait_vec3 *wave_positions(int worker_count, bool wave, long long *waved,
 	cloth.collision_flag = PLAIT_COLLIDE_VERTEX;
 	cloth.pins = pins;
 	cloth.pin_count = 2;
-	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
-	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
+	*cloth_id = plait_create_cloth(world, &cloth, &error);
+	cr_assert(!plait_object_id_is_null(*cloth_id), "%s", error.message);
 	add_round_colliders(world);
+	return world;
+}
+
+/* That world after 30 frames: positions, then velocities; *waved: frames run as a wave. */
+static plait_vec3 *wave_positions(int worker_count, bool wave, long long *waved, int *count)
+{
+	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
+	test_grid grid;
+	plait_object_id cloth_id;
+	plait_world_id world = wave_world(pool, wave, &grid, &cloth_id);
+	plait_error error = {0};
 	cr_assert(test_step_frames(world, 30));
 	*waved = world.world->sim.waved_frames;
 	*count = grid.vertex_count;
 	plait_vec3 *both = malloc(sizeof *both * 2 * (size_t)*count);
-	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, both, &error), PLAIT_OK, "%s", error.message);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, both, &error), PLAIT_OK, "%s",
+	             error.message);
 	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, *count, both + *count, &error), PLAIT_OK, "%s",
 	             error.message);
 	plait_destroy_world(world);
@@ -593,6 +605,39 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
 	}
 	free(passes);
 	free(waves);
+}
+
+/* A wave checks each region as it leaves columns (solver.c): a velocity that overflows in the
+ * last region fails the frame, and the frame's start comes back to the bit. */
+Test(threads, a_wave_going_non_finite_is_rolled_back_to_the_bit, .timeout = 600)
+{
+	test_grid grid;
+	plait_object_id cloth_id;
+	plait_world_id world = wave_world(NULL, true, &grid, &cloth_id);
+	cr_assert(test_step_frames(world, 2));
+	int count = grid.vertex_count;
+	plait_vec3 *x = malloc(sizeof *x * (size_t)count), *v = malloc(sizeof *v * (size_t)count);
+	plait_vec3 *out = malloc(sizeof *out * (size_t)count);
+	plait_error error = {0};
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, count, x, &error), PLAIT_OK);
+	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, count, v, &error), PLAIT_OK);
+	v[count - 3] = (plait_vec3){3e38f, 0.0f, 0.0f};
+	cr_assert_eq(plait_object_set_velocities(cloth_id, 0, count, v, &error), PLAIT_OK);
+	long long waved = world.world->sim.waved_frames;
+	cr_assert_eq(plait_world_step(world, &error), PLAIT_ERROR_NONFINITE);
+	if (plait_simd_is_supported(PLAIT_SIMD_AVX512)) {
+		cr_expect_eq(world.world->sim.waved_frames, waved + 1, "the failed frame did not run as a wave");
+	}
+	cr_assert_eq(plait_world_get_frame(world), 2);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, count, out, &error), PLAIT_OK);
+	cr_expect(memcmp(out, x, sizeof *x * (size_t)count) == 0, "positions were not restored");
+	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, count, out, &error), PLAIT_OK);
+	cr_expect(memcmp(out, v, sizeof *v * (size_t)count) == 0, "velocities were not restored");
+	free(x);
+	free(v);
+	free(out);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
 }
 
 Test(threads, tethered_cloth_same_with_1_2_and_8_workers, .timeout = 600)

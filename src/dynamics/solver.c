@@ -302,6 +302,33 @@ static bool closes_foldably(const plait_sim *sim, const int *in_substep, int fir
 	       in_substep[collision] == 1 && plait_tethers_by_particle(&sim->tether);
 }
 
+/* Whether any of count floats is an infinity or a NaN (all exponent bits set), in a loop
+ * without branches that the compiler vectorises: it runs over every position and velocity once
+ * a frame. */
+static bool any_nonfinite(const float *values, size_t count)
+{
+	uint32_t bad = 0;
+	for (size_t k = 0; k < count; ++k) {
+		uint32_t bits;
+		memcpy(&bits, &values[k], sizeof bits);
+		bad |= (uint32_t)((bits & 0x7f800000u) == 0x7f800000u);
+	}
+	return bad != 0;
+}
+
+/* The frame's own passes over every particle, split over the workers like the substeps' (on
+ * one thread they were a few percent of a two-thread frame at hang-128): keeping the frame's
+ * start and the largest radius, checking the end is finite, moving the pins' start. */
+typedef struct frame_job {
+	plait_sim *sim;
+	_Atomic uint32_t largest_radius_bits; /* a non-negative float's bits order as it does */
+	_Atomic int nonfinite;
+	bool checked; /* nonfinite is known: a wave checked each region as it left columns */
+} frame_job;
+
+/* Whether positions or velocities of particles [begin, end) are not finite (below). */
+static void frame_check_range(void *context, int begin, int end);
+
 /* Waves. Where a frame is only distance sweeps and folded closes on columns, on one or two
  * threads, it runs as one wave down the regions (wave.h): each region's points and constraints
  * serve every pass of the frame while they are in cache, instead of coming from memory once a
@@ -392,6 +419,7 @@ static bool plan_wave(plait_sim *sim, plait_wave *wave, const plait_collider_pas
 
 typedef struct wave_frame {
 	plait_sim *sim;
+	frame_job *frame;                        /* the frame's check, made as each region leaves columns */
 	folded_job closes[PLAIT_WAVE_MAX_SLOTS]; /* one a substep */
 } wave_frame;
 
@@ -411,12 +439,13 @@ static void wave_leave(void *context, int begin, int end)
 {
 	wave_frame *frame = context;
 	from_columns_range(frame->sim, begin, end);
+	frame_check_range(frame->frame, begin, end);
 }
 
 /* The frame as the wave planned (plan_wave), substep 0 begun: what run_substeps does for every
  * substep, with the passes run by plait_wave_run. */
 static plait_result run_wave_frame(plait_sim *sim, plait_wave *wave, const particle_job *job,
-                                   plait_collider_pass *colliders, float inverse_h_squared,
+                                   plait_collider_pass *colliders, float inverse_h_squared, frame_job *check,
                                    plait_error *error)
 {
 	int substeps = sim->settings.substeps;
@@ -432,6 +461,7 @@ static plait_result run_wave_frame(plait_sim *sim, plait_wave *wave, const parti
 	sim->collision_seconds += plait_seconds() - contacts_start;
 	wave_frame storage, *frame = &storage;
 	frame->sim = sim;
+	frame->frame = check;
 	for (int s = 0; s < substeps; ++s) {
 		bool beginning = s + 1 < substeps;
 		folded_job *close = &frame->closes[s];
@@ -447,6 +477,7 @@ static plait_result run_wave_frame(plait_sim *sim, plait_wave *wave, const parti
 	wave->context = frame;
 	plait_wave_run(wave);
 	sim->in_columns = false;
+	check->checked = true;
 
 	long long collide_ns = 0;
 	for (int o = 0; o < wave->slot_count; ++o) {
@@ -527,29 +558,6 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 	}
 }
 
-/* Whether any of count floats is an infinity or a NaN (all exponent bits set), in a loop
- * without branches that the compiler vectorises: it runs over every position and velocity once
- * a frame. */
-static bool any_nonfinite(const float *values, size_t count)
-{
-	uint32_t bad = 0;
-	for (size_t k = 0; k < count; ++k) {
-		uint32_t bits;
-		memcpy(&bits, &values[k], sizeof bits);
-		bad |= (uint32_t)((bits & 0x7f800000u) == 0x7f800000u);
-	}
-	return bad != 0;
-}
-
-/* The frame's own passes over every particle, split over the workers like the substeps' (on
- * one thread they were a few percent of a two-thread frame at hang-128): keeping the frame's
- * start and the largest radius, checking the end is finite, moving the pins' start. */
-typedef struct frame_job {
-	plait_sim *sim;
-	_Atomic uint32_t largest_radius_bits; /* a non-negative float's bits order as it does */
-	_Atomic int nonfinite;
-} frame_job;
-
 static void frame_start_range(void *context, int begin, int end)
 {
 	frame_job *job = context;
@@ -606,7 +614,7 @@ static void restore_frame_start(plait_sim *sim)
 }
 
 /* The substeps of one frame (seed 000 §2.2), with the workers running. */
-static plait_result run_substeps(plait_sim *sim, plait_error *error)
+static plait_result run_substeps(plait_sim *sim, frame_job *frame, plait_error *error)
 {
 	const plait_settings *settings = &sim->settings;
 	int substeps = settings->substeps;
@@ -677,7 +685,7 @@ static plait_result run_substeps(plait_sim *sim, plait_error *error)
 		if (s == 0) {
 			plait_wave wave;
 			if (plan_wave(sim, &wave, &colliders, fold, air)) {
-				return run_wave_frame(sim, &wave, &job, &colliders, inverse_h_squared, error);
+				return run_wave_frame(sim, &wave, &job, &colliders, inverse_h_squared, frame, error);
 			}
 		}
 		for (int e = first; e < last - (fold ? 2 : 0); ++e) {
@@ -735,13 +743,15 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 	plait_tethers_begin_frame(&sim->tether, p, &sim->allocator);
 	plait_float_mode saved_mode = plait_float_mode_enter();
 	plait_parallel_begin(&sim->parallel);
-	frame_job frame = {sim, 0, 0};
+	frame_job frame = {sim, 0, 0, false};
 	plait_parallel_for(&sim->parallel, frame_start_range, &frame, 0, p->count, PARTICLE_GRAIN);
 	uint32_t largest_bits = atomic_load_explicit(&frame.largest_radius_bits, memory_order_relaxed);
 	memcpy(&sim->largest_radius, &largest_bits, sizeof sim->largest_radius);
-	result = run_substeps(sim, error);
+	result = run_substeps(sim, &frame, error);
 	if (result == PLAIT_OK) {
-		plait_parallel_for(&sim->parallel, frame_check_range, &frame, 0, p->count, PARTICLE_GRAIN);
+		if (!frame.checked) {
+			plait_parallel_for(&sim->parallel, frame_check_range, &frame, 0, p->count, PARTICLE_GRAIN);
+		}
 		if (atomic_load_explicit(&frame.nonfinite, memory_order_relaxed) == 0) {
 			plait_parallel_for(&sim->parallel, frame_pins_range, &frame, 0, p->count, PARTICLE_GRAIN);
 		}
