@@ -521,11 +521,13 @@ Test(threads, a_close_on_columns_gives_the_point_arrays_bits, .timeout = 600)
 }
 
 /* A rigid cloth (every kind at the maximum resistance, distance bends) hung from two pins by
- * tethers onto a bouncy, sticky sphere and a capsule: stretch swept twice a substep (forward, then
+ * tethers onto a bouncy, sticky sphere and a capsule (pins: 0 the first row's corners, 1 the last
+ * row's, 2 opposite corners; anchors in the last region are read by the first regions' closes
+ * before their own region goes into columns): stretch swept twice a substep (forward, then
  * symmetric), shear and bend once (forward and backward in turn). 10,201 particles in 16 regions
  * a block. With one worker the frame runs as one wave down the regions (dynamics/wave.h) unless
  * `wave` is off; with more it never does. */
-static plait_world_id wave_world(plait_thread_pool *pool, bool wave, test_grid *grid,
+static plait_world_id wave_world(plait_thread_pool *pool, bool wave, int pins_at, test_grid *grid,
                                  plait_object_id *cloth_id)
 {
 	plait_world_def wdef = plait_default_world_def();
@@ -539,7 +541,8 @@ static plait_world_id wave_world(plait_thread_pool *pool, bool wave, test_grid *
 	plait_error error = {0};
 	int n = 100;
 	*grid = test_grid_make(n, n, 2.0f, 2.0f);
-	int pins[2] = {0, n};
+	int last = grid->vertex_count - 1;
+	int pins[3][2] = {{0, n}, {last - n, last}, {0, last}};
 	plait_cloth_def cloth = plait_default_cloth_def();
 	cloth.mesh = test_grid_mesh(grid);
 	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
@@ -550,7 +553,7 @@ static plait_world_id wave_world(plait_thread_pool *pool, bool wave, test_grid *
 	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
 	cloth.damp = 0.3f;
 	cloth.collision_flag = PLAIT_COLLIDE_VERTEX;
-	cloth.pins = pins;
+	cloth.pins = pins[pins_at];
 	cloth.pin_count = 2;
 	*cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(*cloth_id), "%s", error.message);
@@ -558,15 +561,16 @@ static plait_world_id wave_world(plait_thread_pool *pool, bool wave, test_grid *
 	return world;
 }
 
-/* That world after 30 frames: positions, then velocities; *waved: frames run as a wave. */
-static plait_vec3 *wave_positions(int worker_count, bool wave, long long *waved, int *count)
+/* That world after `frames` frames: positions, then velocities; *waved: frames run as a wave. */
+static plait_vec3 *wave_positions(int worker_count, bool wave, int pins_at, int frames, long long *waved,
+                                  int *count)
 {
 	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
 	test_grid grid;
 	plait_object_id cloth_id;
-	plait_world_id world = wave_world(pool, wave, &grid, &cloth_id);
+	plait_world_id world = wave_world(pool, wave, pins_at, &grid, &cloth_id);
 	plait_error error = {0};
-	cr_assert(test_step_frames(world, 30));
+	cr_assert(test_step_frames(world, frames));
 	*waved = world.world->sim.waved_frames;
 	*count = grid.vertex_count;
 	plait_vec3 *both = malloc(sizeof *both * 2 * (size_t)*count);
@@ -584,9 +588,9 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
 {
 	long long waved = 0;
 	int count;
-	plait_vec3 *passes = wave_positions(1, false, &waved, &count);
+	plait_vec3 *passes = wave_positions(1, false, 0, 30, &waved, &count);
 	cr_assert_eq(waved, 0);
-	plait_vec3 *waves = wave_positions(1, true, &waved, &count);
+	plait_vec3 *waves = wave_positions(1, true, 0, 30, &waved, &count);
 	/* The wave projects on columns, which need the AVX-512 kernels. */
 	bool columns = plait_simd_is_supported(PLAIT_SIMD_AVX512);
 	cr_expect_eq(waved > 0, columns, "frames run as a wave: %lld", waved);
@@ -597,7 +601,7 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
 	          "the wave changes positions or velocities");
 	int workers[] = {2, 8};
 	for (size_t k = 0; k < sizeof workers / sizeof workers[0]; ++k) {
-		plait_vec3 *threaded = wave_positions(workers[k], true, &waved, &count);
+		plait_vec3 *threaded = wave_positions(workers[k], true, 0, 30, &waved, &count);
 		cr_expect_eq(waved, 0, "a wave on %d workers", workers[k]);
 		cr_expect(memcmp(threaded, waves, sizeof *waves * 2 * (size_t)count) == 0,
 		          "%d workers give other positions or velocities than a wave on one", workers[k]);
@@ -605,6 +609,18 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
 	}
 	free(passes);
 	free(waves);
+	/* Anchors in the last region, from the first frame (columns never filled before) on. */
+	for (int pins_at = 1; pins_at <= 2; ++pins_at) {
+		for (int frames = 1; frames <= 5; frames += 4) {
+			passes = wave_positions(1, false, pins_at, frames, &waved, &count);
+			waves = wave_positions(1, true, pins_at, frames, &waved, &count);
+			cr_expect_eq(waved > 0, columns, "pins %d: frames run as a wave: %lld", pins_at, waved);
+			cr_expect(memcmp(waves, passes, sizeof *passes * 2 * (size_t)count) == 0,
+			          "pins %d, %d frames: the wave changes positions or velocities", pins_at, frames);
+			free(passes);
+			free(waves);
+		}
+	}
 }
 
 /* A wave checks each region as it leaves columns (solver.c): a velocity that overflows in the
@@ -613,7 +629,7 @@ Test(threads, a_wave_going_non_finite_is_rolled_back_to_the_bit, .timeout = 600)
 {
 	test_grid grid;
 	plait_object_id cloth_id;
-	plait_world_id world = wave_world(NULL, true, &grid, &cloth_id);
+	plait_world_id world = wave_world(NULL, true, 0, &grid, &cloth_id);
 	cr_assert(test_step_frames(world, 2));
 	int count = grid.vertex_count;
 	plait_vec3 *x = malloc(sizeof *x * (size_t)count), *v = malloc(sizeof *v * (size_t)count);

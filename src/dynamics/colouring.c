@@ -287,6 +287,43 @@ static void choose_columns(plait_sim *sim, int segment_count)
 
 /* Every block's order is computed first and applied only when all succeeded, so a failure
  * leaves every block as it was. */
+/* Whether the distance blocks' banded boundaries agree (plait_sim.bands_agree): each block's
+ * holds no particle in two cuts (band_boundary), and neither do they together. False without
+ * the memory to check. */
+static bool bands_agree(const plait_sim *sim, plait_distance_block *const *blocks, int count)
+{
+	int n = sim->particles.count, regions = 0;
+	int *held_by = plait_alloc(&sim->allocator, sizeof(int) * (size_t)(n > 0 ? n : 1));
+	bool agree = held_by != NULL;
+	for (int i = 0; agree && i < n; ++i) {
+		held_by[i] = -1;
+	}
+	for (int k = 0; agree && k < count; ++k) {
+		const plait_distance_block *block = blocks[k];
+		const plait_colouring *colouring = &block->colouring;
+		if (block->count == 0) {
+			continue;
+		}
+		regions = regions == 0 ? colouring->region_count : regions;
+		agree = colouring->boundary_cut_start != NULL && colouring->region_count == regions;
+		int runs = agree ? colouring->run_count - colouring->region_start[regions] : 0;
+		for (int m = 0; agree && m < runs; ++m) {
+			const int *cut_start = colouring->boundary_cut_start + (size_t)m * (size_t)regions;
+			for (int cut = 0; agree && cut + 1 < regions; ++cut) {
+				for (int c = cut_start[cut]; agree && c < cut_start[cut + 1]; ++c) {
+					for (int end = 0; end < 2; ++end) {
+						int particle = block->pair[c][end];
+						agree = agree && (held_by[particle] < 0 || held_by[particle] == cut);
+						held_by[particle] = cut;
+					}
+				}
+			}
+		}
+	}
+	plait_free(&sim->allocator, held_by);
+	return agree;
+}
+
 bool plait_sim_colour(plait_sim *sim)
 {
 	if (!sim->colouring_dirty) {
@@ -348,6 +385,7 @@ bool plait_sim_colour(plait_sim *sim)
 			}
 		}
 		choose_columns(sim, segment_count);
+		sim->bands_agree = bands_agree(sim, distance, DISTANCE_BLOCKS);
 		const int *order = orders[DISTANCE_BLOCKS];
 		permute(scratch, bend->quad, sizeof *bend->quad, bend->count, order);
 		permute(scratch, bend->rest_angle, sizeof(float), bend->count, order);

@@ -84,6 +84,9 @@ void plait_solve_tethers_of_particles(plait_tether_block *block, plait_point *po
 bool plait_tethers_on_columns(const plait_tether_block *block);
 /* plait_solve_tethers_of_particles on the points as columns (solver.c, "Columns"), to the same
  * bits; only when plait_tethers_on_columns and the columns kernels run (AVX-512). */
+/* Copies the anchors of tethers on columns (plait_tethers_on_columns) into the columns. */
+void plait_tether_anchors_to_columns(const plait_tether_block *block, const plait_particles *particles,
+                                     const plait_columns *columns);
 void plait_solve_tethers_of_particles_on_columns(plait_tether_block *block, const plait_columns *columns,
                                                  int begin, int end);
 /* For the frame to come: whether every tether's anchor is pinned (pins change between frames

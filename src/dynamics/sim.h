@@ -360,6 +360,9 @@ typedef struct plait_sim {
 	/* Run a frame as one wave down the regions when it allows it (solver.c, "Waves"); always on
 	 * but for tests and benchmarks comparing the two. */
 	bool wave_frames;
+	/* The distance blocks' boundaries are banded alike: no particle is held by constraints of two
+	 * cuts, in one block or across them (set when the blocks are coloured; wave.h). */
+	bool bands_agree;
 	long long waved_frames; /* frames that ran as a wave, since the sim was made (for tests) */
 
 	/* Scratch of the particle-pair stage (spatial hash and contacts). */

@@ -373,10 +373,11 @@ static bool plan_wave(plait_sim *sim, plait_wave *wave, const plait_collider_pas
 {
 	int n = sim->particles.count, substeps = sim->settings.substeps;
 	if (!sim->wave_frames || !fold || air || sim->parallel.worker_count > 1 || sim->particle_pairs_active ||
-	    sim->mesh_contacts_active || sim->pair_contact_count != 0 || sim->simd != PLAIT_SIMD_AVX512 ||
-	    !sim->close_on_columns || !sim->use_columns || sim->columns_capacity < n ||
-	    !plait_tethers_on_columns(&sim->tether) || !sim->tether.anchors_keep_bits ||
-	    !plait_collider_pass_on_columns(colliders) || !colliders_keep_still(sim)) {
+	    sim->mesh_contacts_active || sim->pair_contact_count != 0 || !sim->bands_agree ||
+	    sim->simd != PLAIT_SIMD_AVX512 || !sim->close_on_columns || !sim->use_columns ||
+	    sim->columns_capacity < n || !plait_tethers_on_columns(&sim->tether) ||
+	    !sim->tether.anchors_keep_bits || !plait_collider_pass_on_columns(colliders) ||
+	    !colliders_keep_still(sim)) {
 		return false;
 	}
 	const plait_schedule *schedule = &sim->schedule;
@@ -453,6 +454,7 @@ static plait_result run_wave_frame(plait_sim *sim, plait_wave *wave, const parti
 	 * nothing the substeps change. */
 	double contacts_start = plait_seconds();
 	for (int s = 1; s < substeps; ++s) {
+		sim->substep = s;
 		if (!plait_contacts_begin_substep(sim)) {
 			return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY,
 			                       "out of memory in the collision stage; the frame was not advanced");
@@ -475,6 +477,9 @@ static plait_result run_wave_frame(plait_sim *sim, plait_wave *wave, const parti
 	wave->close = wave_close;
 	wave->leave = wave_leave;
 	wave->context = frame;
+	/* Every region's close reads the tether anchors from columns, some before their own region
+	 * goes there; pinned, they keep their bits through the frame. */
+	plait_tether_anchors_to_columns(&sim->tether, &sim->particles, &columns);
 	plait_wave_run(wave);
 	sim->in_columns = false;
 	check->checked = true;

@@ -789,6 +789,20 @@ bool plait_tethers_on_columns(const plait_tether_block *block)
 	return block->count == 0 || (plait_tethers_by_particle(block) && block->lanes->others.count == 0);
 }
 
+void plait_tether_anchors_to_columns(const plait_tether_block *block, const plait_particles *particles,
+                                     const plait_columns *columns)
+{
+	const plait_tether_lanes *lanes = block->lanes;
+	if (block->count == 0 || lanes == NULL) {
+		return;
+	}
+	for (int a = 0; a < lanes->anchor_count; ++a) {
+		int i = lanes->anchors[a];
+		plait_column_set(columns, i, particles->point[i].x);
+		columns->w[i] = particles->point[i].w;
+	}
+}
+
 void plait_solve_tethers_of_particles_on_columns(plait_tether_block *block, const plait_columns *columns,
                                                  int begin, int end)
 {
