@@ -449,6 +449,18 @@ Test(threads, closing_passes_give_the_same_bits_folded_or_not, .timeout = 600)
 	}
 }
 
+/* A cloth's positions, then its velocities (the closes on columns write velocities from positions
+ * read there). */
+static plait_vec3 *positions_and_velocities(plait_object_id cloth_id, int count)
+{
+	plait_error error = {0};
+	plait_vec3 *both = malloc(sizeof *both * 2 * (size_t)count);
+	cr_assert_eq(plait_object_get_positions(cloth_id, 0, count, both, &error), PLAIT_OK, "%s", error.message);
+	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, count, both + count, &error), PLAIT_OK, "%s",
+	             error.message);
+	return both;
+}
+
 /* A cloth hung from two pins (its tethers all rows of two), dropped onto a bouncy, sticky
  * sphere and a capsule (colliders met forward and back), with its substeps' closes on the
  * points as columns (solver.c, "Columns") or on the point array. 10,201 particles: chunks of
@@ -484,16 +496,7 @@ static plait_vec3 *column_close_positions(int worker_count, bool on_columns, lon
 	*closed = world.world->sim.closed_on_columns;
 	*columns_used = world.world->sim.use_columns && world.world->sim.simd == PLAIT_SIMD_AVX512;
 	*count = grid.vertex_count;
-	plait_vec3 *x = malloc(sizeof *x * (size_t)*count);
-	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, x, &error), PLAIT_OK, "%s", error.message);
-	plait_vec3 *v = malloc(sizeof *v * (size_t)*count);
-	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, *count, v, &error), PLAIT_OK, "%s", error.message);
-	/* Velocities too: the close on columns writes them from positions it read there. */
-	plait_vec3 *both = malloc(sizeof *both * 2 * (size_t)*count);
-	memcpy(both, x, sizeof *x * (size_t)*count);
-	memcpy(both + *count, v, sizeof *v * (size_t)*count);
-	free(x);
-	free(v);
+	plait_vec3 *both = positions_and_velocities(cloth_id, *count);
 	plait_destroy_world(world);
 	test_grid_free(&grid);
 	plait_thread_pool_destroy(pool);
@@ -569,15 +572,10 @@ static plait_vec3 *wave_positions(int worker_count, bool wave, int pins_at, int 
 	test_grid grid;
 	plait_object_id cloth_id;
 	plait_world_id world = wave_world(pool, wave, pins_at, &grid, &cloth_id);
-	plait_error error = {0};
 	cr_assert(test_step_frames(world, frames));
 	*waved = world.world->sim.waved_frames;
 	*count = grid.vertex_count;
-	plait_vec3 *both = malloc(sizeof *both * 2 * (size_t)*count);
-	cr_assert_eq(plait_object_get_positions(cloth_id, 0, *count, both, &error), PLAIT_OK, "%s",
-	             error.message);
-	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, *count, both + *count, &error), PLAIT_OK, "%s",
-	             error.message);
+	plait_vec3 *both = positions_and_velocities(cloth_id, *count);
 	plait_destroy_world(world);
 	test_grid_free(&grid);
 	plait_thread_pool_destroy(pool);
