@@ -461,6 +461,22 @@ static plait_vec3 *positions_and_velocities(plait_object_id cloth_id, int count)
 	return both;
 }
 
+/* A stiff cloth on `grid` hung from two pins by tethers, meeting colliders with its vertices
+ * (stretch and compression rigid, distance bends). */
+static plait_cloth_def hung_cloth_def(const test_grid *grid, const int *pins)
+{
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(grid);
+	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+	cloth.bend_model = PLAIT_BEND_DISTANCE;
+	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
+	cloth.damp = 0.3f;
+	cloth.collision_flag = PLAIT_COLLIDE_VERTEX;
+	cloth.pins = pins;
+	cloth.pin_count = 2;
+	return cloth;
+}
+
 /* A cloth hung from two pins (its tethers all rows of two), dropped onto a bouncy, sticky
  * sphere and a capsule (colliders met forward and back), with its substeps' closes on the
  * points as columns (solver.c, "Columns") or on the point array. 10,201 particles: chunks of
@@ -480,15 +496,7 @@ static plait_vec3 *column_close_positions(int worker_count, bool on_columns, lon
 	int n = 100;
 	test_grid grid = test_grid_make(n, n, 2.0f, 2.0f);
 	int pins[2] = {0, n};
-	plait_cloth_def cloth = plait_default_cloth_def();
-	cloth.mesh = test_grid_mesh(&grid);
-	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
-	cloth.bend_model = PLAIT_BEND_DISTANCE;
-	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
-	cloth.damp = 0.3f;
-	cloth.collision_flag = PLAIT_COLLIDE_VERTEX;
-	cloth.pins = pins;
-	cloth.pin_count = 2;
+	plait_cloth_def cloth = hung_cloth_def(&grid, pins);
 	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
 	add_round_colliders(world);
@@ -546,18 +554,10 @@ static plait_world_id wave_world(plait_thread_pool *pool, bool wave, int pins_at
 	*grid = test_grid_make(n, n, 2.0f, 2.0f);
 	int last = grid->vertex_count - 1;
 	int pins[3][2] = {{0, n}, {last - n, last}, {0, last}};
-	plait_cloth_def cloth = plait_default_cloth_def();
-	cloth.mesh = test_grid_mesh(grid);
-	cloth.stretch_resistance = cloth.compression_resistance = 10000.0f;
+	plait_cloth_def cloth = hung_cloth_def(grid, pins[pins_at]);
 	cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
 	cloth.iterations = 6;
 	cloth.shear_iterations = cloth.bend_iterations = 3;
-	cloth.bend_model = PLAIT_BEND_DISTANCE;
-	cloth.tethers = PLAIT_TETHER_EUCLIDEAN;
-	cloth.damp = 0.3f;
-	cloth.collision_flag = PLAIT_COLLIDE_VERTEX;
-	cloth.pins = pins[pins_at];
-	cloth.pin_count = 2;
 	*cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(*cloth_id), "%s", error.message);
 	add_round_colliders(world);

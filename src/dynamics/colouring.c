@@ -86,9 +86,10 @@ static void colour_list(colouring_state *state, const int *list, int n, int slab
 }
 
 /* The boundary of a coloured block, banded when it can be (colouring.h): each constraint
- * between two adjacent regions, and no particle held by constraints of two cuts. Sorts each
- * boundary run by cut (its constraints share no particle, so their order in it changes
- * nothing) and returns the runs' cut starts, or NULL (not banded, or out of memory). */
+ * between two adjacent regions. Sorts each boundary run by cut (its constraints share no
+ * particle, so their order in it changes nothing) and returns the runs' cut starts, or NULL (not
+ * banded, or out of memory). That no particle is held by two cuts is checked over all the
+ * blocks together (bands_agree). */
 static int *band_boundary(const plait_allocator *allocator, const int *vertices, int arity,
                           int particle_count, int *order, plait_colouring *colouring)
 {
@@ -100,12 +101,8 @@ static int *band_boundary(const plait_allocator *allocator, const int *vertices,
 	int first = colouring->run_start[first_run], count = colouring->run_start[colouring->run_count] - first;
 	int *cut_of = plait_alloc(allocator, sizeof(int) * (size_t)count);
 	int *sorted = plait_alloc(allocator, sizeof(int) * (size_t)count);
-	int *held_by = plait_alloc(allocator, sizeof(int) * (size_t)particle_count);
 	int *starts = plait_alloc(allocator, sizeof(int) * ((size_t)runs * (size_t)regions + 1));
-	bool banded = cut_of != NULL && sorted != NULL && held_by != NULL && starts != NULL;
-	for (int i = 0; banded && i < particle_count; ++i) {
-		held_by[i] = -1;
-	}
+	bool banded = cut_of != NULL && sorted != NULL && starts != NULL;
 	for (int k = 0; banded && k < count; ++k) {
 		const int *tuple = vertices + (size_t)order[first + k] * (size_t)arity;
 		int low = INT_MAX, high = -1;
@@ -115,10 +112,6 @@ static int *band_boundary(const plait_allocator *allocator, const int *vertices,
 			high = region > high ? region : high;
 		}
 		banded = high == low + 1;
-		for (int a = 0; banded && a < arity; ++a) {
-			banded = held_by[tuple[a]] < 0 || held_by[tuple[a]] == low;
-			held_by[tuple[a]] = low;
-		}
 		cut_of[k] = low;
 	}
 	/* Each run by cut, stably: a counting sort. */
@@ -148,7 +141,6 @@ static int *band_boundary(const plait_allocator *allocator, const int *vertices,
 	}
 	plait_free(allocator, cut_of);
 	plait_free(allocator, sorted);
-	plait_free(allocator, held_by);
 	if (!banded) {
 		plait_free(allocator, starts);
 		return NULL;
@@ -285,11 +277,9 @@ static void choose_columns(plait_sim *sim, int segment_count)
 	sim->columns_capacity = padded;
 }
 
-/* Every block's order is computed first and applied only when all succeeded, so a failure
- * leaves every block as it was. */
-/* Whether the distance blocks' banded boundaries agree (plait_sim.bands_agree): each block's
- * holds no particle in two cuts (band_boundary), and neither do they together. False without
- * the memory to check. */
+/* Whether the distance blocks' boundaries are banded alike (plait_sim.bands_agree): each banded
+ * (band_boundary), in the same regions, and no particle held by constraints of two cuts, in one
+ * block or across them. False without the memory to check. */
 static bool bands_agree(const plait_sim *sim, plait_distance_block *const *blocks, int count)
 {
 	int n = sim->particles.count, regions = 0;
@@ -324,6 +314,8 @@ static bool bands_agree(const plait_sim *sim, plait_distance_block *const *block
 	return agree;
 }
 
+/* Every block's order is computed first and applied only when all succeeded, so a failure
+ * leaves every block as it was. */
 bool plait_sim_colour(plait_sim *sim)
 {
 	if (!sim->colouring_dirty) {

@@ -16,11 +16,12 @@
  * projected together in SIMD lanes. (Slabs of 512 in the 8,000-constraint regions of a
  * 512 x 512 cloth made it 7% slower, with no better strain.)
  *
- * Bands. Where every boundary constraint joins two adjacent regions and no particle is held by
- * constraints of two cuts (cut c lies between regions c and c + 1), each boundary run is sorted
- * by cut (boundary_cut_start): its constraints share no particle, so the order changes nothing.
- * A pass can then sweep the boundary cut by cut, each cut next to its two regions, and passes can
- * follow each other down the regions as a wave (dynamics/wave.h).
+ * Bands. Where every boundary constraint joins two adjacent regions (cut c lies between regions
+ * c and c + 1), each boundary run is sorted by cut (boundary_cut_start): its constraints share no
+ * particle, so the order changes nothing. A pass can then sweep the boundary cut by cut, each cut
+ * next to its two regions, and where no particle is held by constraints of two cuts
+ * (plait_sim.bands_agree, over all the blocks) passes can follow each other down the regions as a
+ * wave (dynamics/wave.h).
  *
  * How the block is cut depends on the block alone, never on the thread count or the instruction
  * set, and constraints of a run or of different regions commute: the output is bit-identical
