@@ -3,6 +3,7 @@
  * all run at once; results do not depend on the worker count; `plait run --threads`; and the
  * hang-128 example scene loads. */
 #include "cli.h"
+#include "core/parallel.h"
 #include "collide_scenes.h"
 #include "scene.h"
 #include "test_cli.h"
@@ -20,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 /* ---- Every item exactly once ---------------------------------------------------------------- */
@@ -142,6 +144,83 @@ Test(threads, more_enqueues_than_slots)
 			cr_assert_eq(atomic_load(&contexts[e].hits[i]), 1, "enqueue %d item %d", e, i);
 	free(contexts);
 	plait_thread_pool_destroy(pool);
+}
+
+/* ---- A worker that starts late joins the loop under way ------------------------------------- */
+
+/* A task system whose worker thread starts only when told (late_start.go): the first loop of a
+ * frame is then posted before the worker runs. */
+typedef struct late_start {
+	pthread_t thread;
+	plait_task_fn *task;
+	void *task_context;
+	atomic_int go;
+	atomic_int worker_ran; /* a chunk ran on the worker */
+	pthread_t caller;
+} late_start;
+
+static void *late_thread(void *argument)
+{
+	late_start *late = argument;
+	while (!atomic_load(&late->go)) {
+		sched_yield();
+	}
+	late->task(0, 1, 1, late->task_context);
+	return NULL;
+}
+
+static void *late_enqueue(plait_task_fn *task, int item_count, int min_range, void *task_context,
+                          void *user_context)
+{
+	(void)item_count;
+	(void)min_range;
+	late_start *late = user_context;
+	late->task = task;
+	late->task_context = task_context;
+	return pthread_create(&late->thread, NULL, late_thread, late) == 0 ? late : NULL;
+}
+
+static void late_finish(void *handle, void *user_context)
+{
+	(void)user_context;
+	late_start *late = handle;
+	atomic_store(&late->go, 1);
+	pthread_join(late->thread, NULL);
+}
+
+/* Chunk 0 (the caller's) lets the worker start and waits up to 5 s for it to take chunk 1. */
+static void late_chunk(void *context, int begin, int end)
+{
+	(void)end;
+	late_start *late = context;
+	if (!pthread_equal(pthread_self(), late->caller)) {
+		atomic_store(&late->worker_ran, 1);
+		return;
+	}
+	if (begin == 0) {
+		atomic_store(&late->go, 1);
+		time_t give_up = time(NULL) + 5;
+		while (!atomic_load(&late->worker_ran) && time(NULL) < give_up) {
+			sched_yield();
+		}
+	}
+}
+
+Test(threads, a_worker_that_starts_late_joins_the_first_loop_of_the_frame)
+{
+	late_start late;
+	memset(&late, 0, sizeof late);
+	atomic_init(&late.go, 0);
+	atomic_init(&late.worker_ran, 0);
+	late.caller = pthread_self();
+	plait_parallel parallel;
+	plait_parallel_init(&parallel, late_enqueue, late_finish, &late, 2);
+	/* A loop of an earlier frame, so that the first loop of this one is not the first ever. */
+	plait_parallel_for(&parallel, late_chunk, &late, 2, 4, 1);
+	plait_parallel_begin(&parallel);
+	plait_parallel_for(&parallel, late_chunk, &late, 0, 2, 1);
+	plait_parallel_end(&parallel);
+	cr_expect(atomic_load(&late.worker_ran), "the worker took no chunk of the loop posted before it started");
 }
 
 Test(threads, create_attach_and_counts)

@@ -31,7 +31,7 @@ static inline int ticket_next(uint64_t ticket)
 
 /* Busy-wait step: a pause for the first spins, then give the processor away, so that more
  * workers than cores (or a busy machine) slow the frame down instead of stalling it. */
-static void spin_wait(int *spins)
+void plait_spin_wait(int *spins)
 {
 	*spins += 1;
 	if (*spins < 2000) {
@@ -112,7 +112,10 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 	struct plait_parallel_worker *worker = task_context;
 	plait_parallel *parallel = worker->parallel;
 	plait_float_mode saved_mode = plait_float_mode_enter();
-	uint32_t seen = atomic_load_explicit(&parallel->announce, memory_order_acquire);
+	/* The loops of this frame so far, not the last announced: a worker that starts after the
+	 * first loop was posted still joins it (the frame's first loop, a pass over every particle,
+	 * otherwise ran on the calling thread alone). */
+	uint32_t seen = parallel->begin_generation;
 	for (;;) {
 		int spins = 0;
 		uint32_t announced;
@@ -125,7 +128,7 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 				plait_float_mode_leave(saved_mode);
 				return;
 			}
-			spin_wait(&spins);
+			plait_spin_wait(&spins);
 		}
 		seen = announced;
 		run_chunks(parallel, seen, worker->index);
@@ -139,6 +142,7 @@ void plait_parallel_begin(plait_parallel *parallel)
 	}
 	atomic_store_explicit(&parallel->quit, 0, memory_order_release);
 	parallel->running = true;
+	parallel->begin_generation = parallel->generation;
 	for (int k = 1; k < parallel->worker_count; ++k) {
 		parallel->tasks[k] =
 		    parallel->enqueue_task(worker_task, 1, 1, &parallel->workers[k], parallel->user_context);
@@ -197,6 +201,6 @@ void plait_parallel_for(plait_parallel *parallel, plait_range_fn *fn, void *cont
 	run_chunks(parallel, parallel->generation, 0);
 	int spins = 0;
 	while (atomic_load_explicit(&parallel->done, memory_order_acquire) < chunks) {
-		spin_wait(&spins);
+		plait_spin_wait(&spins);
 	}
 }

@@ -42,6 +42,7 @@ typedef struct plait_parallel {
 	int begin, end, grain;
 
 	uint32_t generation;       /* of the current loop, never 0 once a loop was posted */
+	uint32_t begin_generation; /* of the last loop before plait_parallel_begin */
 	_Atomic uint32_t announce; /* the generation workers wait for */
 	_Atomic int done;          /* chunks of the current loop finished */
 	_Atomic int quit;
@@ -71,5 +72,10 @@ void plait_parallel_end(plait_parallel *parallel);
  * when they are running and the loop has more than one chunk, else on the calling thread. */
 void plait_parallel_for(plait_parallel *parallel, plait_range_fn *fn, void *context, int begin, int end,
                         int grain);
+
+/* One step of a busy wait (start *spins at 0): a pause for the first steps, then the processor
+ * given away, so that more workers than cores (or a busy machine) slow a wait down instead of
+ * stalling it. */
+void plait_spin_wait(int *spins);
 
 #endif
