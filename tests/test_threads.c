@@ -9,6 +9,7 @@
 #include "test_cli.h"
 #include "test_support.h"
 #include "thread_pool.h"
+#include "dynamics/wave.h"
 #include "world/world.h"
 
 #include <criterion/criterion.h>
@@ -617,30 +618,35 @@ Test(threads, a_close_on_columns_gives_the_point_arrays_bits, .timeout = 600)
  * symmetric), shear and bend once (forward and backward in turn). 10,201 particles in 16 regions
  * a block. With one worker the frame runs as one wave down the regions (dynamics/wave.h) unless
  * `wave` is off; with more it never does. */
-static plait_world_id wave_world(plait_thread_pool *pool, bool wave, int pins_at, test_grid *grid,
-                                 plait_object_id *cloth_id)
+static plait_world_id wave_world_sized(plait_thread_pool *pool, bool wave, int pins_at, int n, int substeps,
+                                       int iterations, test_grid *grid, plait_object_id *cloth_id)
 {
 	plait_world_def wdef = plait_default_world_def();
-	wdef.substeps = 3;
-	wdef.max_collision_iterations = 3; /* once a substep: closes fold */
+	wdef.substeps = substeps;
+	wdef.max_collision_iterations = substeps; /* once a substep: closes fold */
 	wdef.air_density = 0.0f;
 	plait_thread_pool_attach(pool, &wdef);
 	plait_world_id world = plait_create_world(&wdef, NULL);
 	cr_assert(!plait_world_id_is_null(world));
 	world.world->sim.wave_frames = wave;
 	plait_error error = {0};
-	int n = 100;
 	*grid = test_grid_make(n, n, 2.0f, 2.0f);
 	int last = grid->vertex_count - 1;
 	int pins[3][2] = {{0, n}, {last - n, last}, {0, last}};
 	plait_cloth_def cloth = hung_cloth_def(grid, pins[pins_at]);
 	cloth.shear_resistance = cloth.bend_resistance = 10000.0f;
-	cloth.iterations = 6;
-	cloth.shear_iterations = cloth.bend_iterations = 3;
+	cloth.iterations = iterations;
+	cloth.shear_iterations = cloth.bend_iterations = (iterations + 1) / 2;
 	*cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(*cloth_id), "%s", error.message);
 	add_round_colliders(world);
 	return world;
+}
+
+static plait_world_id wave_world(plait_thread_pool *pool, bool wave, int pins_at, test_grid *grid,
+                                 plait_object_id *cloth_id)
+{
+	return wave_world_sized(pool, wave, pins_at, 100, 3, 6, grid, cloth_id);
 }
 
 /* That world after `frames` frames: positions, then velocities; *waved: frames run as a wave. */
@@ -700,13 +706,88 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
 	}
 }
 
-/* A wave checks each region as it leaves columns (solver.c): a velocity that overflows in the
- * last region fails the frame, and the frame's start comes back to the bit. */
-Test(threads, a_wave_going_non_finite_is_rolled_back_to_the_bit, .timeout = 600)
+/* A wave world of n x n quads and `substeps` run on `worker_count` workers, the wave in pieces
+ * whatever the cloth's size (dynamics/wave.h, "Pieces"); after its first frame the line between
+ * the first two threads moves by `line_step` regions a frame, back and forth (any lines give the
+ * same bits). Positions, then velocities; *pieced: frames run as a wave in pieces. */
+static plait_vec3 *piece_positions(int worker_count, int pins_at, int n, int substeps, int iterations,
+                                   int frames, int line_step, long long *pieced, int *count)
 {
+	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
 	test_grid grid;
 	plait_object_id cloth_id;
-	plait_world_id world = wave_world(NULL, true, 0, &grid, &cloth_id);
+	plait_world_id world = wave_world_sized(pool, true, pins_at, n, substeps, iterations, &grid, &cloth_id);
+	world.world->sim.wave_pieces_min_particles = 0;
+	for (int frame = 0; frame < frames; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_wave_plan *plan = world.world->sim.wave_plan;
+		if (line_step != 0 && plan != NULL && plan->made) {
+			int lines[2] = {0, plan->line[1] + (frame % 2 == 0 ? line_step : -line_step / 2)};
+			cr_expect(plait_wave_plan_set_lines(plan, lines), "line %d does not fit", lines[1]);
+		}
+	}
+	*pieced = world.world->sim.pieced_frames;
+	*count = grid.vertex_count;
+	plait_vec3 *both = positions_and_velocities(cloth_id, *count);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+	plait_thread_pool_destroy(pool);
+	return both;
+}
+
+Test(threads, a_wave_in_pieces_gives_the_passes_bits, .timeout = 600)
+{
+	bool columns = plait_simd_is_supported(PLAIT_SIMD_AVX512);
+	long long waved = 0, pieced = 0;
+	int count;
+	/* 16 regions and 15 slots a frame: two threads' line can only be at region 1. Pins in the
+	 * first row, the last row and opposite corners (anchors read by both threads' closes). */
+	for (int pins_at = 0; pins_at <= 2; ++pins_at) {
+		plait_vec3 *passes = wave_positions(1, false, pins_at, 6, &waved, &count);
+		plait_vec3 *pieces = piece_positions(2, pins_at, 100, 3, 6, 6, 0, &pieced, &count);
+		cr_expect_eq(pieced, columns ? 6 : 0, "pins %d: frames run in pieces: %lld of 6", pins_at, pieced);
+		cr_expect(memcmp(pieces, passes, sizeof *passes * 2 * (size_t)count) == 0,
+		          "pins %d: a wave in pieces on two threads changes positions or velocities", pins_at);
+		free(passes);
+		free(pieces);
+	}
+	/* 40 regions and 8 slots (two substeps of one sweep of each kind): lines for 2, 3 and 8
+	 * threads, and two threads' line moved every frame, 3 regions on and 1 back. */
+	plait_vec3 *passes = NULL;
+	{
+		plait_thread_pool *none = NULL;
+		test_grid grid;
+		plait_object_id cloth_id;
+		plait_world_id world = wave_world_sized(none, false, 0, 200, 2, 1, &grid, &cloth_id);
+		cr_assert(test_step_frames(world, 5));
+		count = grid.vertex_count;
+		passes = positions_and_velocities(cloth_id, count);
+		plait_destroy_world(world);
+		test_grid_free(&grid);
+	}
+	int workers[] = {2, 3, 8, 2};
+	for (size_t k = 0; k < sizeof workers / sizeof workers[0]; ++k) {
+		int step = k == 3 ? 3 : 0;
+		plait_vec3 *pieces = piece_positions(workers[k], 0, 200, 2, 1, 5, step, &pieced, &count);
+		cr_expect_eq(pieced, columns ? 5 : 0, "%d workers: frames run in pieces: %lld of 5", workers[k],
+		             pieced);
+		cr_expect(memcmp(pieces, passes, sizeof *passes * 2 * (size_t)count) == 0,
+		          "%d workers (line moved by %d): a wave in pieces changes positions or velocities",
+		          workers[k], step);
+		free(pieces);
+	}
+	free(passes);
+}
+
+/* A wave checks each region as it leaves columns (solver.c): a velocity that overflows in the
+ * last region fails the frame, and the frame's start comes back to the bit. */
+static void check_wave_rolled_back(int worker_count)
+{
+	plait_thread_pool *pool = worker_count > 1 ? plait_thread_pool_create(worker_count) : NULL;
+	test_grid grid;
+	plait_object_id cloth_id;
+	plait_world_id world = wave_world(pool, true, 0, &grid, &cloth_id);
+	world.world->sim.wave_pieces_min_particles = 0;
 	cr_assert(test_step_frames(world, 2));
 	int count = grid.vertex_count;
 	plait_vec3 *x = malloc(sizeof *x * (size_t)count), *v = malloc(sizeof *v * (size_t)count);
@@ -716,10 +797,12 @@ Test(threads, a_wave_going_non_finite_is_rolled_back_to_the_bit, .timeout = 600)
 	cr_assert_eq(plait_object_get_velocities(cloth_id, 0, count, v, &error), PLAIT_OK);
 	v[count - 3] = (plait_vec3){3e38f, 0.0f, 0.0f};
 	cr_assert_eq(plait_object_set_velocities(cloth_id, 0, count, v, &error), PLAIT_OK);
-	long long waved = world.world->sim.waved_frames;
+	long long waved = world.world->sim.waved_frames, pieced = world.world->sim.pieced_frames;
 	cr_assert_eq(plait_world_step(world, &error), PLAIT_ERROR_NONFINITE);
 	if (plait_simd_is_supported(PLAIT_SIMD_AVX512)) {
 		cr_expect_eq(world.world->sim.waved_frames, waved + 1, "the failed frame did not run as a wave");
+		cr_expect_eq(world.world->sim.pieced_frames, pieced + (worker_count > 1 ? 1 : 0),
+		             "the failed frame did not run in pieces on %d workers", worker_count);
 	}
 	cr_assert_eq(plait_world_get_frame(world), 2);
 	cr_assert_eq(plait_object_get_positions(cloth_id, 0, count, out, &error), PLAIT_OK);
@@ -731,6 +814,13 @@ Test(threads, a_wave_going_non_finite_is_rolled_back_to_the_bit, .timeout = 600)
 	free(out);
 	plait_destroy_world(world);
 	test_grid_free(&grid);
+	plait_thread_pool_destroy(pool);
+}
+
+Test(threads, a_wave_going_non_finite_is_rolled_back_to_the_bit, .timeout = 600)
+{
+	check_wave_rolled_back(1);
+	check_wave_rolled_back(2);
 }
 
 Test(threads, tethered_cloth_same_with_1_2_and_8_workers, .timeout = 600)

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "dynamics/batch_layout.h"
+#include "dynamics/wave.h"
 
 #define NO_COLOUR (-1)
 
@@ -314,6 +315,30 @@ static bool bands_agree(const plait_sim *sim, plait_distance_block *const *block
 	return agree;
 }
 
+/* Room for the wave in pieces (wave.h) where several workers may run it; none without the
+ * memory (the passes then run). */
+static void reserve_wave_plan(plait_sim *sim, plait_distance_block *const *blocks, int count)
+{
+	int regions = 0;
+	for (int k = 0; k < count && regions == 0; ++k) {
+		regions = blocks[k]->count > 0 ? blocks[k]->colouring.region_count : 0;
+	}
+	bool pieces = sim->bands_agree && regions >= 2 && sim->parallel.worker_count > 1 &&
+	              sim->particles.count >= sim->wave_pieces_min_particles;
+	if (sim->wave_plan == NULL && pieces) {
+		sim->wave_plan = plait_alloc_zero(&sim->allocator, 1, sizeof(plait_wave_plan));
+	}
+	if (sim->wave_plan == NULL) {
+		return;
+	}
+	if (!pieces ||
+	    !plait_wave_plan_reserve(sim->wave_plan, &sim->allocator, regions, sim->parallel.worker_count)) {
+		plait_wave_plan_destroy(sim->wave_plan, &sim->allocator);
+		plait_free(&sim->allocator, sim->wave_plan);
+		sim->wave_plan = NULL;
+	}
+}
+
 /* Every block's order is computed first and applied only when all succeeded, so a failure
  * leaves every block as it was. */
 bool plait_sim_colour(plait_sim *sim)
@@ -378,6 +403,7 @@ bool plait_sim_colour(plait_sim *sim)
 		}
 		choose_columns(sim, segment_count);
 		sim->bands_agree = bands_agree(sim, distance, DISTANCE_BLOCKS);
+		reserve_wave_plan(sim, distance, DISTANCE_BLOCKS);
 		const int *order = orders[DISTANCE_BLOCKS];
 		permute(scratch, bend->quad, sizeof *bend->quad, bend->count, order);
 		permute(scratch, bend->rest_angle, sizeof(float), bend->count, order);

@@ -2,6 +2,7 @@
 
 #include "dynamics/colouring.h"
 #include "dynamics/constraints.h"
+#include "dynamics/wave.h"
 
 #include <string.h>
 
@@ -31,6 +32,7 @@ void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
 	sim->fold_closing_passes = true;
 	sim->close_on_columns = true;
 	sim->wave_frames = true;
+	sim->wave_pieces_min_particles = 1 << 17;
 }
 
 #define FREE_FIELD(object, field) plait_free(&sim->allocator, (object).field)
@@ -104,6 +106,10 @@ void plait_sim_destroy(plait_sim *sim)
 	plait_free(&sim->allocator, sim->pair_lower);
 	plait_free(&sim->allocator, sim->pair_upper);
 	plait_free(&sim->allocator, sim->column_x);
+	if (sim->wave_plan != NULL) {
+		plait_wave_plan_destroy(sim->wave_plan, &sim->allocator);
+		plait_free(&sim->allocator, sim->wave_plan);
+	}
 	plait_schedule_destroy(&sim->schedule, &sim->allocator);
 	/* The particle hash is owned by the contact stage and freed there. */
 }

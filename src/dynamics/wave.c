@@ -1,5 +1,9 @@
 #include "dynamics/wave.h"
 
+#include <string.h>
+
+#include "core/clock.h"
+
 #include "dynamics/colouring.h"
 
 bool plait_wave_takes(const plait_distance_block *block, int regions, int particle_count)
@@ -10,28 +14,38 @@ bool plait_wave_takes(const plait_distance_block *block, int regions, int partic
 	       plait_colouring_end(colouring) == block->count;
 }
 
-/* Slot o at region q (wave.h, "The order"). */
-static void run_item(plait_wave *wave, int o, int q)
+static void run_cut(plait_wave *wave, int o, int cut, bool head)
 {
 	const plait_wave_slot *slot = &wave->slots[o];
-	plait_distance_block *block = slot->block;
-	float ih2 = wave->inverse_h_squared;
-	if (block == NULL) {
-		int begin = plait_region_first(q, wave->regions, wave->particle_count),
-		    end = plait_region_first(q + 1, wave->regions, wave->particle_count);
-		wave->close(wave->context, slot->substep, begin, end);
-		if (o == wave->slot_count - 1) {
-			wave->leave(wave->context, begin, end);
-		}
+	bool backward = head ? slot->sweep == PLAIT_SWEEP_BACKWARD : slot->sweep == PLAIT_SWEEP_SYMMETRIC;
+	plait_distance_sweep_cut(slot->block, wave->columns, cut, wave->inverse_h_squared, backward);
+}
+
+/* Slot o's part of region q itself: its sweep, or its close (and after the last slot, leaving
+ * columns). */
+static void run_region(plait_wave *wave, int o, int q)
+{
+	const plait_wave_slot *slot = &wave->slots[o];
+	if (slot->block != NULL) {
+		plait_distance_sweep_region(slot->block, wave->columns, q, wave->inverse_h_squared, slot->sweep);
 		return;
 	}
-	if (slot->sweep != PLAIT_SWEEP_FORWARD && q + 1 < wave->regions) {
-		plait_distance_sweep_cut(block, wave->columns, q, ih2, slot->sweep == PLAIT_SWEEP_BACKWARD);
+	int begin = plait_region_first(q, wave->regions, wave->particle_count),
+	    end = plait_region_first(q + 1, wave->regions, wave->particle_count);
+	wave->close(wave->context, slot->substep, begin, end);
+	if (o == wave->slot_count - 1) {
+		wave->leave(wave->context, begin, end);
 	}
-	plait_distance_sweep_region(block, wave->columns, q, ih2, slot->sweep);
-	if (slot->sweep != PLAIT_SWEEP_BACKWARD && q > 0) {
-		plait_distance_sweep_cut(block, wave->columns, q - 1, ih2, slot->sweep == PLAIT_SWEEP_SYMMETRIC);
-	}
+}
+
+/* Whether slot o has a head (a boundary swept before the regions) or a tail (after them). */
+static bool has_head(const plait_wave *wave, int o)
+{
+	return wave->slots[o].block != NULL && wave->slots[o].sweep != PLAIT_SWEEP_FORWARD;
+}
+static bool has_tail(const plait_wave *wave, int o)
+{
+	return wave->slots[o].block != NULL && wave->slots[o].sweep != PLAIT_SWEEP_BACKWARD;
 }
 
 void plait_wave_run(plait_wave *wave)
@@ -47,9 +61,320 @@ void plait_wave_run(plait_wave *wave)
 			if (q < 0) {
 				break;
 			}
-			if (q < regions) {
-				run_item(wave, o, q);
+			if (q >= regions) {
+				continue;
+			}
+			if (has_head(wave, o) && q + 1 < regions) {
+				run_cut(wave, o, q, true);
+			}
+			run_region(wave, o, q);
+			if (has_tail(wave, o) && q > 0) {
+				run_cut(wave, o, q - 1, false);
 			}
 		}
+	}
+}
+
+/* Pieces (wave.h). */
+
+bool plait_wave_plan_reserve(plait_wave_plan *plan, const plait_allocator *allocator, int regions,
+                             int participants)
+{
+	plait_wave_plan_destroy(plan, allocator);
+	participants = participants < 1 ? 1 : participants > PLAIT_MAX_WORKERS ? PLAIT_MAX_WORKERS : participants;
+	size_t tasks = (size_t)PLAIT_WAVE_MAX_SLOTS * 3 * (size_t)(regions > 0 ? regions : 1);
+	plan->tasks = plait_alloc(allocator, sizeof(plait_wave_task) * tasks);
+	plan->waits = plait_alloc(allocator, sizeof(int[3]) * tasks);
+	plan->done = plait_alloc(allocator, sizeof(_Atomic uint32_t) * tasks);
+	plan->in_order = plait_alloc(allocator, sizeof(plait_wave_task) * tasks);
+	plan->before = plait_alloc(allocator, sizeof(int[3]) * tasks);
+	plan->owner = plait_alloc(allocator, sizeof(int) * (tasks + 3 * (size_t)regions));
+	plan->position = plait_alloc(allocator, sizeof(int) * tasks);
+	plan->list_start = plait_alloc(allocator, sizeof(int) * ((size_t)participants + 1));
+	if (plan->tasks == NULL || plan->waits == NULL || plan->done == NULL || plan->in_order == NULL ||
+	    plan->before == NULL || plan->owner == NULL || plan->position == NULL || plan->list_start == NULL) {
+		plait_wave_plan_destroy(plan, allocator);
+		return false;
+	}
+	for (size_t n = 0; n < tasks; ++n) {
+		atomic_init(&plan->done[n], 0);
+	}
+	plan->task_capacity = (int)tasks;
+	plan->participant_capacity = participants;
+	return true;
+}
+
+void plait_wave_plan_destroy(plait_wave_plan *plan, const plait_allocator *allocator)
+{
+	plait_free(allocator, plan->tasks);
+	plait_free(allocator, plan->waits);
+	plait_free(allocator, (void *)plan->done);
+	plait_free(allocator, plan->in_order);
+	plait_free(allocator, plan->before);
+	plait_free(allocator, plan->owner);
+	plait_free(allocator, plan->position);
+	plait_free(allocator, plan->list_start);
+	memset(plan, 0, sizeof *plan);
+}
+
+/* The thread that runs region q at slot o: thread k from region line[k] + o on. */
+static int owner_of(const plait_wave_plan *plan, int o, int q)
+{
+	int k = 0;
+	while (k + 1 < plan->participants && q >= plan->line[k + 1] + o) {
+		k += 1;
+	}
+	return k;
+}
+
+/* The thread of a task: a region's; a cut's head that of the region after it (the head comes
+ * before both regions, so the later thread runs it and the earlier waits), a tail that of the
+ * region before it (after both: the earlier thread runs it and waits). */
+static int task_owner(const plait_wave_plan *plan, plait_wave_task task)
+{
+	return owner_of(plan, task.slot, task.kind == PLAIT_WAVE_HEAD ? task.index + 1 : task.index);
+}
+
+/* The particle sets a task touches: region q's own (3q), the cut q's in region q (3q + 1) and in
+ * region q + 1 (3q + 2). */
+static int touched_sets(const plait_wave_plan *plan, plait_wave_task task, int sets[3])
+{
+	int q = task.index;
+	if (task.kind != PLAIT_WAVE_REGION) {
+		sets[0] = 3 * q + 1;
+		sets[1] = 3 * q + 2;
+		return 2;
+	}
+	int count = 0;
+	sets[count++] = 3 * q;
+	if (q + 1 < plan->regions) {
+		sets[count++] = 3 * q + 1;
+	}
+	if (q > 0) {
+		sets[count++] = 3 * (q - 1) + 2;
+	}
+	return count;
+}
+
+/* The wave's tasks in its order (plait_wave_run's), from the plan's slot shapes. */
+static int tasks_in_order(const plait_wave_plan *plan, plait_wave_task *out)
+{
+	int regions = plan->regions, slots = plan->slot_count, count = 0;
+	for (int t = 0; t < regions + slots; ++t) {
+		for (int o = 0; o < slots; ++o) {
+			int q = t - 1 - o, shape = plan->slot_shape[o];
+			if (q < 0) {
+				break;
+			}
+			if (q >= regions) {
+				continue;
+			}
+			if (shape >= 0 && shape != PLAIT_SWEEP_FORWARD && q + 1 < regions) {
+				out[count++] = (plait_wave_task){(int16_t)o, PLAIT_WAVE_HEAD, q};
+			}
+			out[count++] = (plait_wave_task){(int16_t)o, PLAIT_WAVE_REGION, q};
+			if (shape >= 0 && shape != PLAIT_SWEEP_BACKWARD && q > 0) {
+				out[count++] = (plait_wave_task){(int16_t)o, PLAIT_WAVE_TAIL, q - 1};
+			}
+		}
+	}
+	return count;
+}
+
+/* Whether every thread has regions at every slot: each line within the cloth through the frame. */
+static bool lines_fit(const plait_wave_plan *plan)
+{
+	for (int k = 1; k < plan->participants; ++k) {
+		int low = k > 1 ? plan->line[k - 1] + 1 : 1;
+		if (plan->line[k] < low || plan->line[k] + plan->slot_count - 1 > plan->regions - 1) {
+			return false;
+		}
+	}
+	return true;
+}
+
+/* Each thread's list of tasks, in the wave's order, and what each task waits for: the task before
+ * it on each of its particle sets when another thread runs that one. */
+static void plan_lists(plait_wave_plan *plan)
+{
+	int participants = plan->participants;
+	int count = tasks_in_order(plan, plan->in_order);
+	int *last = plan->owner + count;
+	for (int k = 0; k < 3 * plan->regions; ++k) {
+		last[k] = -1;
+	}
+	int *start = plan->list_start;
+	memset(start, 0, sizeof(int) * (size_t)(participants + 1));
+	for (int n = 0; n < count; ++n) {
+		plait_wave_task task = plan->in_order[n];
+		int sets[3], set_count = touched_sets(plan, task, sets);
+		plan->owner[n] = task_owner(plan, task);
+		start[plan->owner[n] + 1] += 1;
+		for (int k = 0; k < 3; ++k) {
+			plan->before[n][k] = k < set_count ? last[sets[k]] : -1;
+		}
+		for (int k = 0; k < set_count; ++k) {
+			last[sets[k]] = n;
+		}
+	}
+	for (int k = 0; k < participants; ++k) {
+		start[k + 1] += start[k];
+	}
+	int next[PLAIT_MAX_WORKERS];
+	memcpy(next, start, sizeof(int) * (size_t)participants);
+	for (int n = 0; n < count; ++n) {
+		plan->position[n] = next[plan->owner[n]]++;
+		plan->tasks[plan->position[n]] = plan->in_order[n];
+	}
+	for (int n = 0; n < count; ++n) {
+		int *waits = plan->waits[plan->position[n]];
+		for (int k = 0; k < 3; ++k) {
+			int before = plan->before[n][k];
+			waits[k] = before >= 0 && plan->owner[before] != plan->owner[n] ? plan->position[before] : -1;
+		}
+	}
+}
+
+bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int participants)
+{
+	int slots = wave->slot_count, regions = wave->regions;
+	if (plan->tasks == NULL || participants < 2 || participants > plan->participant_capacity || slots < 1 ||
+	    regions < 2 || (size_t)slots * 3 * (size_t)regions > (size_t)plan->task_capacity) {
+		return false;
+	}
+	int8_t shape[PLAIT_WAVE_MAX_SLOTS];
+	for (int o = 0; o < slots; ++o) {
+		shape[o] = (int8_t)(wave->slots[o].block == NULL ? -1 : (int)wave->slots[o].sweep);
+	}
+	if (plan->regions == regions && plan->slot_count == slots && plan->participants == participants &&
+	    memcmp(plan->slot_shape, shape, (size_t)slots) == 0) {
+		return plan->made;
+	}
+	plan->regions = regions;
+	plan->slot_count = slots;
+	plan->participants = participants;
+	memcpy(plan->slot_shape, shape, (size_t)slots);
+	plan->lean = 0.0;
+	/* Lines that give each thread an equal share of the frame's region tasks: the first k threads
+	 * hold sum over o of (line[k] + o) of them (clipped to the cloth). */
+	for (int k = 1; k < participants; ++k) {
+		int64_t goal = (int64_t)regions * slots * k / participants, best_miss = -1;
+		for (int x = -slots; x <= regions; ++x) {
+			int64_t held = 0;
+			for (int o = 0; o < slots; ++o) {
+				int width = x + o;
+				held += width < 0 ? 0 : width > regions ? regions : width;
+			}
+			int64_t miss = held > goal ? held - goal : goal - held;
+			if (best_miss < 0 || miss < best_miss) {
+				best_miss = miss;
+				plan->line[k] = x;
+			}
+		}
+	}
+	plan->made = lines_fit(plan);
+	if (plan->made) {
+		plan_lists(plan);
+	}
+	return plan->made;
+}
+
+bool plait_wave_plan_set_lines(plait_wave_plan *plan, const int *lines)
+{
+	if (!plan->made) {
+		return false;
+	}
+	int kept[PLAIT_MAX_WORKERS];
+	memcpy(kept, plan->line, sizeof(int) * (size_t)plan->participants);
+	memcpy(plan->line + 1, lines + 1, sizeof(int) * (size_t)(plan->participants - 1));
+	if (!lines_fit(plan)) {
+		memcpy(plan->line, kept, sizeof(int) * (size_t)plan->participants);
+		return false;
+	}
+	plan_lists(plan);
+	return true;
+}
+
+typedef struct piece_run {
+	plait_wave *wave;
+	plait_wave_plan *plan;
+	double busy[2]; /* seconds the first two threads ran tasks, not waiting */
+} piece_run;
+
+/* Thread k's list; it waits only where a task needs another thread's. */
+static void run_pieces(void *context, int begin, int end)
+{
+	piece_run *run = context;
+	plait_wave_plan *plan = run->plan;
+	uint32_t epoch = plan->epoch;
+	for (int k = begin; k < end; ++k) {
+		double start = plait_seconds(), waited = 0.0;
+		for (int n = plan->list_start[k]; n < plan->list_start[k + 1]; ++n) {
+			for (int w = 0; w < 3; ++w) {
+				int before = plan->waits[n][w];
+				if (before < 0 || atomic_load_explicit(&plan->done[before], memory_order_acquire) == epoch) {
+					continue;
+				}
+				double wait_start = plait_seconds();
+				int spins = 0;
+				while (atomic_load_explicit(&plan->done[before], memory_order_acquire) != epoch) {
+					plait_spin_wait(&spins);
+				}
+				waited += plait_seconds() - wait_start;
+			}
+			plait_wave_task task = plan->tasks[n];
+			if (task.kind == PLAIT_WAVE_REGION) {
+				run_region(run->wave, task.slot, task.index);
+			} else {
+				run_cut(run->wave, task.slot, task.index, task.kind == PLAIT_WAVE_HEAD);
+			}
+			atomic_store_explicit(&plan->done[n], epoch, memory_order_release);
+		}
+		if (k < 2) {
+			run->busy[k] = plait_seconds() - start - waited;
+		}
+	}
+}
+
+/* The regions into columns, each by the thread that holds it halfway through the frame (the
+ * pieces' shares of the regions are then about even). */
+static void enter_pieces(void *context, int begin, int end)
+{
+	piece_run *run = context;
+	plait_wave *wave = run->wave;
+	for (int q = 0; q < wave->regions; ++q) {
+		int owner = owner_of(run->plan, wave->slot_count / 2, q);
+		if (owner >= begin && owner < end) {
+			wave->enter(wave->context, plait_region_first(q, wave->regions, wave->particle_count),
+			            plait_region_first(q + 1, wave->regions, wave->particle_count));
+		}
+	}
+}
+
+/* Two threads: the line moves a region toward the thread that ran shorter when the other has run
+ * longer by more than a region's tasks over the last frames (any line gives the same bits). */
+static void balance(plait_wave_plan *plan, double lean, double busy)
+{
+	plan->lean = 0.75 * plan->lean + 0.25 * lean;
+	double column = busy / plan->regions; /* one region at every slot */
+	int step = plan->lean > column ? -1 : plan->lean < -column ? 1 : 0;
+	if (step == 0) {
+		return;
+	}
+	int lines[2] = {0, plan->line[1] + step};
+	if (plait_wave_plan_set_lines(plan, lines)) {
+		plan->lean = 0.0;
+	}
+}
+
+void plait_wave_run_pieces(plait_wave *wave, plait_wave_plan *plan, plait_parallel *parallel)
+{
+	int participants = plan->participants;
+	piece_run run = {wave, plan, {0.0, 0.0}};
+	plait_parallel_for(parallel, enter_pieces, &run, 0, participants, 1);
+	plan->epoch = plan->epoch == UINT32_MAX ? 1 : plan->epoch + 1;
+	plait_parallel_for(parallel, run_pieces, &run, 0, participants, 1);
+	if (participants == 2) {
+		balance(plan, run.busy[0] - run.busy[1], run.busy[0] + run.busy[1]);
 	}
 }

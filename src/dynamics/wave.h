@@ -25,13 +25,33 @@
  * several substeps are under way at once. So the bits are those of the passes one after another
  * (test_threads, a_wave_gives_the_passes_bits).
  *
- * One thread only. Two threads were tried both ways: two chunks of regions meeting in the middle
- * (the threads wait on each other at the cut between them every slot: 7-11% slower than the
- * passes on two threads), and the slots in two halves, one behind the other (the second waits for
- * the first to get through its half's slots at the first regions: 7-65% slower). */
+ * Pieces (several threads). The wave's order is one sequence of tasks: a region's part of a slot,
+ * or a cut's boundary before (head) or after (tail) the regions. Two tasks depend on each other
+ * when they touch one particle: a region's particles, or a cut's, which lie in its two regions (no
+ * particle in two cuts: banded). P threads share the frame in pieces that move one region a slot:
+ * thread k runs the regions from line[k] + o on at slot o (to the next thread's line), so
+ * everything a region at slot o needs of slot o - 1 (its neighbours' regions and cuts) is its own
+ * thread's or the next thread's, never the one before. A cut on a line goes to the thread that
+ * runs it last among its two regions' (a head to the later thread, a tail to the earlier). Each
+ * thread runs its tasks in the wave's order and, before a task, waits for the tasks before it on
+ * its particles that another thread runs (a flag a task). Every pair of touching tasks thus keeps
+ * the wave's order, so the bits are the same for any thread count; and since each thread takes
+ * its tasks in the wave's order, the earliest task not yet run can always run: no thread waits
+ * for ever (provided every worker task starts: the task system's contract, core/parallel.h).
+ * Thread k only waits for thread k + 1, which starts its regions a line later in the wave's order
+ * and so runs ahead; with the lines set for equal shares (and moved by a region where one of two
+ * threads ran longer: collisions are not spread evenly), the waits are a small part of the frame.
+ * The lines must stay within the cloth through the frame (each thread has regions at every slot):
+ * cloths of fewer regions than about slots + 2 per thread keep the passes.
+ * Tried before (performance.md, sessions 20 and 21): two chunks of regions meeting in the middle
+ * (they wait on each other at the cut between them every slot), the slots in two halves, one
+ * behind the other (the second waits for the first at the first regions), and tiles in rows of
+ * slots with wedges between pieces after a barrier (the frame's data loaded once a row). */
 #ifndef PLAIT_DYNAMICS_WAVE_H
 #define PLAIT_DYNAMICS_WAVE_H
 
+#include "core/alloc.h"
+#include "core/parallel.h"
 #include "dynamics/constraints.h"
 #include "dynamics/sim.h"
 
@@ -61,6 +81,56 @@ typedef struct plait_wave {
 	plait_wave_leave_fn *leave;
 	void *context;
 } plait_wave;
+
+/* A task of a wave run in pieces: a region's part of a slot, or a cut's boundary ahead of or
+ * after it. */
+enum { PLAIT_WAVE_HEAD, PLAIT_WAVE_REGION, PLAIT_WAVE_TAIL };
+typedef struct plait_wave_task {
+	int16_t slot;
+	int16_t kind;
+	int32_t index; /* region or cut */
+} plait_wave_task;
+
+/* A wave's tasks in a list per thread (thread k's: [list_start[k], list_start[k + 1]) of tasks),
+ * made once for a frame's shape and kept (plait_wave_plan_make). */
+typedef struct plait_wave_plan {
+	/* what it was made for */
+	int regions, slot_count, participants;
+	int8_t slot_shape[PLAIT_WAVE_MAX_SLOTS]; /* the sweep, or -1 for a close */
+	bool made;
+	int line[PLAIT_MAX_WORKERS]; /* [k], k >= 1: thread k's first region at slot o is line[k] + o */
+	int *list_start;
+	plait_wave_task *tasks;
+	int (*waits)[3];        /* [task]: tasks of other threads it waits for, or -1 */
+	_Atomic uint32_t *done; /* [task]: the run (epoch) it was last done in */
+	uint32_t epoch;         /* of the current run */
+	double lean;            /* two threads: how much longer thread 0 ran, smoothed (seconds) */
+	/* scratch while planning */
+	plait_wave_task *in_order; /* the tasks in the wave's order */
+	int (*before)[3];          /* what each waits for, in the wave's order */
+	int *owner;                /* each task's thread, then each particle set's last task */
+	int *position;             /* each task's place in tasks */
+	int task_capacity, participant_capacity;
+} plait_wave_plan;
+
+/* Room for plans over `regions` regions on up to `participants` threads; false without the memory
+ * (the plan is then empty and never made). */
+bool plait_wave_plan_reserve(plait_wave_plan *plan, const plait_allocator *allocator, int regions,
+                             int participants);
+void plait_wave_plan_destroy(plait_wave_plan *plan, const plait_allocator *allocator);
+
+/* Plans `wave` (its slots, regions and particles set) on `participants` >= 2 threads, or keeps
+ * the plan already made for the same shape; false when the pieces do not fit the cloth. */
+bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int participants);
+
+/* Moves the lines to lines[1 .. participants - 1] and plans the lists again (the balance does;
+ * tests move them to show any lines give the same bits); false, the plan unchanged, when they do
+ * not fit the cloth or no plan was made. */
+bool plait_wave_plan_set_lines(plait_wave_plan *plan, const int *lines);
+
+/* Runs the wave as planned on the loops of `parallel` (each thread its list; the first slot's
+ * regions into columns first), then moves the line between two threads toward balance. */
+void plait_wave_run_pieces(plait_wave *wave, plait_wave_plan *plan, plait_parallel *parallel);
 
 /* Whether a distance block can take part in a wave over `particle_count` particles cut into
  * `regions` regions: rigid (no multipliers to reset each substep), coloured whole for those
