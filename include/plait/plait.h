@@ -78,9 +78,12 @@ typedef void plait_free_fn(void *memory, void *user_context);
 
 /* Task system hooks (Box2D shape). The world splits work into item ranges and calls
  * enqueue_task; the user runs task(start, end, worker_index, task_context) on any thread for
- * each range (or all at once) and finish_task waits for it. Results never depend on how the
- * ranges are scheduled. If enqueue_task is NULL everything runs on the calling thread. A task
- * uses up to about 32 KB of its thread's stack. */
+ * each range (or all at once) and finish_task waits for it. With worker_count > 1, each task
+ * must start on a thread of its own without waiting for finish_task: the world keeps
+ * worker_count - 1 tasks running for a frame, which take their work as it comes (a task not
+ * started, or a NULL handle, only costs speed). Results never depend on how the work is
+ * scheduled. If enqueue_task is NULL everything runs on the calling thread. A task uses up to
+ * about 32 KB of its thread's stack. */
 typedef void plait_task_fn(int start_index, int end_index, int worker_index, void *task_context);
 typedef void *plait_enqueue_task_fn(plait_task_fn *task, int item_count, int min_range, void *task_context,
                                     void *user_context);

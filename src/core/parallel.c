@@ -1,5 +1,6 @@
 #include "core/parallel.h"
 
+#include "core/clock.h"
 #include "core/float_mode.h"
 
 #include <string.h>
@@ -59,6 +60,7 @@ void plait_parallel_init(plait_parallel *parallel, plait_enqueue_task_fn *enqueu
 	atomic_init(&parallel->announce, 0);
 	atomic_init(&parallel->done, 0);
 	atomic_init(&parallel->quit, 0);
+	atomic_init(&parallel->running_workers, 0);
 	for (int k = 0; k < PLAIT_MAX_WORKERS; ++k) {
 		atomic_init(&parallel->shares[k].ticket, 0);
 		parallel->workers[k].parallel = parallel;
@@ -116,6 +118,7 @@ static void worker_task(int start_index, int end_index, int worker_index, void *
 	 * first loop was posted still joins it (the frame's first loop, a pass over every particle,
 	 * otherwise ran on the calling thread alone). */
 	uint32_t seen = parallel->begin_generation;
+	atomic_fetch_add_explicit(&parallel->running_workers, 1, memory_order_release);
 	for (;;) {
 		int spins = 0;
 		uint32_t announced;
@@ -143,6 +146,7 @@ void plait_parallel_begin(plait_parallel *parallel)
 	atomic_store_explicit(&parallel->quit, 0, memory_order_release);
 	parallel->running = true;
 	parallel->begin_generation = parallel->generation;
+	atomic_store_explicit(&parallel->running_workers, 0, memory_order_relaxed);
 	for (int k = 1; k < parallel->worker_count; ++k) {
 		parallel->tasks[k] =
 		    parallel->enqueue_task(worker_task, 1, 1, &parallel->workers[k], parallel->user_context);
@@ -162,6 +166,31 @@ void plait_parallel_end(plait_parallel *parallel)
 		}
 	}
 	parallel->running = false;
+}
+
+bool plait_parallel_all_running(plait_parallel *parallel, double seconds)
+{
+	if (parallel->worker_count <= 1) {
+		return true;
+	}
+	if (!parallel->running) {
+		return false;
+	}
+	for (int k = 1; k < parallel->worker_count; ++k) {
+		if (parallel->tasks[k] == NULL) {
+			return false;
+		}
+	}
+	double give_up = plait_seconds() + seconds;
+	int spins = 0;
+	while (atomic_load_explicit(&parallel->running_workers, memory_order_acquire) !=
+	       parallel->worker_count - 1) {
+		if (plait_seconds() > give_up) {
+			return false;
+		}
+		plait_spin_wait(&spins);
+	}
+	return true;
 }
 
 void plait_parallel_for(plait_parallel *parallel, plait_range_fn *fn, void *context, int begin, int end,

@@ -9,8 +9,9 @@
  * left of the others' shares; the loop returns when every chunk is done. The same items thus
  * tend to stay on the same core from one loop to the next, where their data is in cache. Callers only pass
  * loops whose items are independent, so the result does not depend on who ran which chunk: output is the same
- * for any thread count. The calling thread can finish a loop alone, so a worker that starts late only costs
- * time.
+ * for any thread count. The calling thread can finish such a loop alone, so a worker that starts late only
+ * costs time. The one loop whose items wait for each other (the wave in pieces, dynamics/wave.h) runs only
+ * when every worker is running (plait_parallel_all_running).
  *
  * The contract for the task system is Box2D's: with worker_count > 1, each enqueued task must
  * start on a thread of its own without waiting for finish_task (the workers wait for loops
@@ -46,6 +47,7 @@ typedef struct plait_parallel {
 	_Atomic uint32_t announce; /* the generation workers wait for */
 	_Atomic int done;          /* chunks of the current loop finished */
 	_Atomic int quit;
+	_Atomic int running_workers; /* worker tasks of this frame that have started */
 	struct plait_parallel_share {
 		/* generation (24 bits) | end of the share (20) | next chunk (20); a claim is a
 		 * compare-and-swap that also checks the generation, so a late worker cannot take a
@@ -67,6 +69,11 @@ void plait_parallel_init(plait_parallel *parallel, plait_enqueue_task_fn *enqueu
 void plait_parallel_begin(plait_parallel *parallel);
 /* Stops them and waits for their tasks to return. */
 void plait_parallel_end(plait_parallel *parallel);
+
+/* Whether every worker task of the frame has started (always with one worker), waiting up to
+ * `seconds` for those not yet started: each then takes its own share of every loop posted from
+ * now on. False at once when the task system gave a NULL handle (a task it did not start). */
+bool plait_parallel_all_running(plait_parallel *parallel, double seconds);
 
 /* Runs fn over [begin, end) in chunks of grain items (the last may be shorter), on the workers
  * when they are running and the loop has more than one chunk, else on the calling thread. */

@@ -421,8 +421,12 @@ static bool plan_wave(plait_sim *sim, plait_wave *wave, const plait_collider_pas
 		return false;
 	}
 	int workers = sim->parallel.worker_count;
+	/* In pieces the threads wait for each other: only with every worker running. A task system
+	 * that has not started one within 10 ms (or gave a NULL handle) leaves this frame to the
+	 * passes, which give the same bits. */
 	return workers == 1 || (n >= sim->wave_pieces_min_particles && sim->wave_plan != NULL &&
-	                        plait_wave_plan_make(sim->wave_plan, wave, workers));
+	                        plait_wave_plan_make(sim->wave_plan, wave, workers) &&
+	                        plait_parallel_all_running(&sim->parallel, 0.01));
 }
 
 typedef struct wave_frame {

@@ -100,6 +100,7 @@ bool plait_wave_plan_reserve(plait_wave_plan *plan, const plait_allocator *alloc
 		atomic_init(&plan->done[n], 0);
 	}
 	plan->task_capacity = (int)tasks;
+	plan->region_capacity = regions;
 	plan->participant_capacity = participants;
 	return true;
 }
@@ -239,7 +240,7 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 {
 	int slots = wave->slot_count, regions = wave->regions;
 	if (plan->tasks == NULL || participants < 2 || participants > plan->participant_capacity || slots < 1 ||
-	    regions < 2 || (size_t)slots * 3 * (size_t)regions > (size_t)plan->task_capacity) {
+	    slots > PLAIT_WAVE_MAX_SLOTS || regions < 2 || regions > plan->region_capacity) {
 		return false;
 	}
 	int8_t shape[PLAIT_WAVE_MAX_SLOTS];

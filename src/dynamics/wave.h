@@ -110,7 +110,7 @@ typedef struct plait_wave_plan {
 	int (*before)[3];          /* what each waits for, in the wave's order */
 	int *owner;                /* each task's thread, then each particle set's last task */
 	int *position;             /* each task's place in tasks */
-	int task_capacity, participant_capacity;
+	int task_capacity, region_capacity, participant_capacity;
 } plait_wave_plan;
 
 /* Room for plans over `regions` regions on up to `participants` threads; false without the memory
