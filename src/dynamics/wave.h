@@ -37,12 +37,14 @@
  * its particles that another thread runs (a flag a task). Every pair of touching tasks thus keeps
  * the wave's order, so the bits are the same for any thread count; and since each thread takes
  * its tasks in the wave's order, the earliest task not yet run can always run: no thread waits
- * for ever (provided every worker task starts: the task system's contract, core/parallel.h).
+ * for ever, once every worker task runs (the solver checks that first:
+ * plait_parallel_all_running). All regions go into columns before the tasks start (a close
+ * reads tether anchors from columns, wherever they are).
  * Thread k only waits for thread k + 1, which starts its regions a line later in the wave's order
  * and so runs ahead; with the lines set for equal shares (and moved by a region where one of two
  * threads ran longer: collisions are not spread evenly), the waits are a small part of the frame.
  * The lines must stay within the cloth through the frame (each thread has regions at every slot):
- * cloths of fewer regions than about slots + 2 per thread keep the passes.
+ * two threads need about slots + 2 regions; a frame that does not fit keeps the passes.
  * Tried before (performance.md, sessions 20 and 21): two chunks of regions meeting in the middle
  * (they wait on each other at the cut between them every slot), the slots in two halves, one
  * behind the other (the second waits for the first at the first regions), and tiles in rows of
