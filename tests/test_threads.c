@@ -710,7 +710,10 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
 	int workers[] = {2, 8};
 	for (size_t k = 0; k < sizeof workers / sizeof workers[0]; ++k) {
 		plait_vec3 *threaded = wave_positions(workers[k], true, 0, 30, &waved, &count);
-		cr_expect_eq(waved, 0, "a wave on %d workers", workers[k]);
+		/* Two threads run it in pieces (below); eight do not fit 16 regions: the passes. */
+		if (workers[k] == 8) {
+			cr_expect_eq(waved, 0, "a wave on %d workers", workers[k]);
+		}
 		cr_expect(memcmp(threaded, waves, sizeof *waves * 2 * (size_t)count) == 0,
 		          "%d workers give other positions or velocities than a wave on one", workers[k]);
 		free(threaded);
@@ -735,6 +738,8 @@ Test(threads, a_wave_gives_the_passes_bits, .timeout = 600)
  * whatever the cloth's size (dynamics/wave.h, "Pieces"); after its first frame the line between
  * the first two threads moves by `line_step` regions a frame, back and forth (any lines give the
  * same bits). Positions, then velocities; *pieced: frames run as a wave in pieces. */
+static int piece_rows; /* piece_positions: rows of the last plan */
+
 static plait_vec3 *piece_positions(int worker_count, int pins_at, int n, int substeps, int iterations,
                                    int frames, int line_step, long long *pieced, int *count)
 {
@@ -742,7 +747,6 @@ static plait_vec3 *piece_positions(int worker_count, int pins_at, int n, int sub
 	test_grid grid;
 	plait_object_id cloth_id;
 	plait_world_id world = wave_world_sized(pool, true, pins_at, n, substeps, iterations, &grid, &cloth_id);
-	world.world->sim.wave_pieces_min_particles = 0;
 	for (int frame = 0; frame < frames; ++frame) {
 		cr_assert(test_step_frames(world, 1));
 		plait_wave_plan *plan = world.world->sim.wave_plan;
@@ -752,6 +756,8 @@ static plait_vec3 *piece_positions(int worker_count, int pins_at, int n, int sub
 		}
 	}
 	*pieced = world.world->sim.pieced_frames;
+	const plait_wave_plan *plan = world.world->sim.wave_plan;
+	piece_rows = plan != NULL && plan->made ? plan->rows : 0;
 	*count = grid.vertex_count;
 	plait_vec3 *both = positions_and_velocities(cloth_id, *count);
 	plait_destroy_world(world);
@@ -778,6 +784,30 @@ Test(threads, a_wave_in_pieces_gives_the_passes_bits, .timeout = 600)
 		          "pins %d: a wave in pieces on two threads changes positions or velocities", pins_at);
 		free(passes);
 		free(pieces);
+	}
+	/* 16 regions and 6 substeps of 5 slots: two threads' lines do not fit the frame, so it runs in
+	 * rows of two substeps (each a wave in pieces, the first and the last rows entering and
+	 * leaving columns). */
+	{
+		plait_vec3 *passes6 = NULL, *pieces6 = NULL;
+		plait_thread_pool *none = NULL;
+		test_grid grid;
+		plait_object_id cloth_id;
+		plait_world_id world = wave_world_sized(none, false, 0, 100, 6, 6, &grid, &cloth_id);
+		cr_assert(test_step_frames(world, 4));
+		count = grid.vertex_count;
+		passes6 = positions_and_velocities(cloth_id, count);
+		plait_destroy_world(world);
+		test_grid_free(&grid);
+		pieces6 = piece_positions(2, 0, 100, 6, 6, 4, 0, &pieced, &count);
+		cr_expect_eq(pieced > 0, columns, "rows: frames run in pieces: %lld of 4", pieced);
+		if (columns) {
+			cr_expect_gt(piece_rows, 1, "one row for 30 slots over 16 regions");
+		}
+		cr_expect(memcmp(pieces6, passes6, sizeof *passes6 * 2 * (size_t)count) == 0,
+		          "a wave in rows of pieces changes positions or velocities");
+		free(passes6);
+		free(pieces6);
 	}
 	/* 40 regions and 8 slots (two substeps of one sweep of each kind): lines for 2, 3 and 8
 	 * threads, and two threads' line moved every frame, 3 regions on and 1 back. */
@@ -832,7 +862,6 @@ static void check_wave_rolled_back(int worker_count)
 	test_grid grid;
 	plait_object_id cloth_id;
 	plait_world_id world = wave_world(pool, true, 0, &grid, &cloth_id);
-	world.world->sim.wave_pieces_min_particles = 0;
 	cr_assert(test_step_frames(world, 2));
 	int count = grid.vertex_count;
 	plait_vec3 *x = malloc(sizeof *x * (size_t)count), *v = malloc(sizeof *v * (size_t)count);

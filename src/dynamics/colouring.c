@@ -323,8 +323,7 @@ static void reserve_wave_plan(plait_sim *sim, plait_distance_block *const *block
 	for (int k = 0; k < count && regions == 0; ++k) {
 		regions = blocks[k]->count > 0 ? blocks[k]->colouring.region_count : 0;
 	}
-	bool pieces = sim->bands_agree && regions >= 2 && sim->parallel.worker_count > 1 &&
-	              sim->particles.count >= sim->wave_pieces_min_particles;
+	bool pieces = sim->bands_agree && regions >= 2 && sim->parallel.worker_count > 1;
 	if (sim->wave_plan == NULL && pieces) {
 		sim->wave_plan = plait_alloc_zero(&sim->allocator, 1, sizeof(plait_wave_plan));
 	}

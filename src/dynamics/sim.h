@@ -367,9 +367,6 @@ typedef struct plait_sim {
 	/* With several workers, the wave in pieces (wave.h): planned once for a frame's shape; NULL
 	 * with one worker or without banded blocks. */
 	struct plait_wave_plan *wave_plan;
-	/* The fewest particles for which several threads run the wave (a smaller cloth's frame fits
-	 * the shared cache, and the passes cost as little; solver.c, "Waves"); lowered by tests. */
-	int wave_pieces_min_particles;
 	long long pieced_frames; /* frames that ran as a wave on several threads (for tests) */
 
 	/* Scratch of the particle-pair stage (spatial hash and contacts). */

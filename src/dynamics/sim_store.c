@@ -32,7 +32,6 @@ void plait_sim_init(plait_sim *sim, const plait_allocator *allocator)
 	sim->fold_closing_passes = true;
 	sim->close_on_columns = true;
 	sim->wave_frames = true;
-	sim->wave_pieces_min_particles = 1 << 17;
 }
 
 #define FREE_FIELD(object, field) plait_free(&sim->allocator, (object).field)

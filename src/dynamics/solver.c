@@ -333,11 +333,11 @@ static void frame_check_range(void *context, int begin, int end);
  * colliders still, it runs as one wave down the regions (wave.h): each region meets every pass of
  * the frame a step after the pass before, while its points, velocities and constraints are in
  * cache (one thread: hang-512 10-13% faster, hang-128 about 3%). On several threads the wave runs
- * in pieces that move a region a slot (wave.h, "Pieces"), from wave_pieces_min_particles on: a
- * smaller cloth's frame fits the shared cache, and there the passes cost as little (two threads:
- * hang-512 4-6% faster, hang-256 3% slower). The same operations on the same values in an order
- * that keeps every particle's, so the bits are the same (test_threads, a_wave_gives_the_passes_bits
- * and a_wave_in_pieces_gives_the_passes_bits). */
+ * in pieces that move a region a slot (wave.h, "Pieces"), in rows of substeps where the frame is
+ * taller than the cloth has regions for (two threads, pieces over passes: hang-128 0.88,
+ * hang-512 0.91-0.96, hang-256 0.92-1.05 depending on the minute). The same operations on the
+ * same values in an order that keeps every particle's, so the bits are the same (test_threads,
+ * a_wave_gives_the_passes_bits and a_wave_in_pieces_gives_the_passes_bits). */
 
 /* The distance block an event of `kind` projects, or NULL: another kind, or bend with
  * dihedral or rod bends (not distance constraints). */
@@ -424,8 +424,7 @@ static bool plan_wave(plait_sim *sim, plait_wave *wave, const plait_collider_pas
 	/* In pieces the threads wait for each other: only with every worker running. A task system
 	 * that has not started one within 10 ms (or gave a NULL handle) leaves this frame to the
 	 * passes, which give the same bits. */
-	return workers == 1 || (n >= sim->wave_pieces_min_particles && sim->wave_plan != NULL &&
-	                        plait_wave_plan_make(sim->wave_plan, wave, workers) &&
+	return workers == 1 || (sim->wave_plan != NULL && plait_wave_plan_make(sim->wave_plan, wave, workers) &&
 	                        plait_parallel_all_running(&sim->parallel, 0.01));
 }
 

@@ -236,28 +236,11 @@ static void plan_lists(plait_wave_plan *plan)
 	}
 }
 
-bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int participants)
+/* Lines that give each thread an equal share of a row's region tasks (the first k threads hold
+ * sum over o of (line[k] + o) of them, clipped to the cloth); whether they fit. */
+static bool place_lines(plait_wave_plan *plan)
 {
-	int slots = wave->slot_count, regions = wave->regions;
-	if (plan->tasks == NULL || participants < 2 || participants > plan->participant_capacity || slots < 1 ||
-	    slots > PLAIT_WAVE_MAX_SLOTS || regions < 2 || regions > plan->region_capacity) {
-		return false;
-	}
-	int8_t shape[PLAIT_WAVE_MAX_SLOTS];
-	for (int o = 0; o < slots; ++o) {
-		shape[o] = (int8_t)(wave->slots[o].block == NULL ? -1 : (int)wave->slots[o].sweep);
-	}
-	if (plan->regions == regions && plan->slot_count == slots && plan->participants == participants &&
-	    memcmp(plan->slot_shape, shape, (size_t)slots) == 0) {
-		return plan->made;
-	}
-	plan->regions = regions;
-	plan->slot_count = slots;
-	plan->participants = participants;
-	memcpy(plan->slot_shape, shape, (size_t)slots);
-	plan->lean = 0.0;
-	/* Lines that give each thread an equal share of the frame's region tasks: the first k threads
-	 * hold sum over o of (line[k] + o) of them (clipped to the cloth). */
+	int regions = plan->regions, slots = plan->slot_count, participants = plan->participants;
 	for (int k = 1; k < participants; ++k) {
 		int64_t goal = (int64_t)regions * slots * k / participants, best_miss = -1;
 		for (int x = -slots; x <= regions; ++x) {
@@ -273,7 +256,44 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 			}
 		}
 	}
-	plan->made = lines_fit(plan);
+	return lines_fit(plan);
+}
+
+bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int participants)
+{
+	int slots = wave->slot_count, regions = wave->regions;
+	if (plan->tasks == NULL || participants < 2 || participants > plan->participant_capacity || slots < 1 ||
+	    slots > PLAIT_WAVE_MAX_SLOTS || regions < 2 || regions > plan->region_capacity) {
+		return false;
+	}
+	int8_t shape[PLAIT_WAVE_MAX_SLOTS];
+	for (int o = 0; o < slots; ++o) {
+		shape[o] = (int8_t)(wave->slots[o].block == NULL ? -1 : (int)wave->slots[o].sweep);
+	}
+	if (plan->regions == regions && plan->frame_slots == slots && plan->participants == participants &&
+	    memcmp(plan->slot_shape, shape, (size_t)slots) == 0) {
+		return plan->made;
+	}
+	plan->regions = regions;
+	plan->frame_slots = slots;
+	plan->participants = participants;
+	memcpy(plan->slot_shape, shape, (size_t)slots);
+	plan->lean = 0.0;
+	plan->made = false;
+	/* The whole frame if the lines fit it, else rows of fewer slots alike (at least
+	 * PLAIT_WAVE_LEAST_ROW: a row ends in a barrier, as a pass does). */
+	for (int rows = 1; rows <= slots && slots / rows >= PLAIT_WAVE_LEAST_ROW && !plan->made; ++rows) {
+		int height = slots / rows;
+		bool alike = slots % rows == 0;
+		for (int r = 1; alike && r < rows; ++r) {
+			alike = memcmp(shape, shape + r * height, (size_t)height) == 0;
+		}
+		if (alike) {
+			plan->rows = rows;
+			plan->slot_count = height;
+			plan->made = place_lines(plan);
+		}
+	}
 	if (plan->made) {
 		plan_lists(plan);
 	}
@@ -299,6 +319,7 @@ bool plait_wave_plan_set_lines(plait_wave_plan *plan, const int *lines)
 typedef struct piece_run {
 	plait_wave *wave;
 	plait_wave_plan *plan;
+	int first_slot; /* of the row */
 	double busy[2]; /* seconds the first two threads ran tasks, not waiting */
 } piece_run;
 
@@ -324,10 +345,11 @@ static void run_pieces(void *context, int begin, int end)
 				waited += plait_seconds() - wait_start;
 			}
 			plait_wave_task task = plan->tasks[n];
+			int slot = run->first_slot + task.slot;
 			if (task.kind == PLAIT_WAVE_REGION) {
-				run_region(run->wave, task.slot, task.index);
+				run_region(run->wave, slot, task.index);
 			} else {
-				run_cut(run->wave, task.slot, task.index, task.kind == PLAIT_WAVE_HEAD);
+				run_cut(run->wave, slot, task.index, task.kind == PLAIT_WAVE_HEAD);
 			}
 			atomic_store_explicit(&plan->done[n], epoch, memory_order_release);
 		}
@@ -344,7 +366,7 @@ static void enter_pieces(void *context, int begin, int end)
 	piece_run *run = context;
 	plait_wave *wave = run->wave;
 	for (int q = 0; q < wave->regions; ++q) {
-		int owner = owner_of(run->plan, wave->slot_count / 2, q);
+		int owner = owner_of(run->plan, run->plan->slot_count / 2, q);
 		if (owner >= begin && owner < end) {
 			wave->enter(wave->context, plait_region_first(q, wave->regions, wave->particle_count),
 			            plait_region_first(q + 1, wave->regions, wave->particle_count));
@@ -371,11 +393,14 @@ static void balance(plait_wave_plan *plan, double lean, double busy)
 void plait_wave_run_pieces(plait_wave *wave, plait_wave_plan *plan, plait_parallel *parallel)
 {
 	int participants = plan->participants;
-	piece_run run = {wave, plan, {0.0, 0.0}};
+	piece_run run = {wave, plan, 0, {0.0, 0.0}};
 	plait_parallel_for(parallel, enter_pieces, &run, 0, participants, 1);
-	plan->epoch = plan->epoch == UINT32_MAX ? 1 : plan->epoch + 1;
-	plait_parallel_for(parallel, run_pieces, &run, 0, participants, 1);
-	if (participants == 2) {
-		balance(plan, run.busy[0] - run.busy[1], run.busy[0] + run.busy[1]);
+	for (int row = 0; row < plan->rows; ++row) {
+		run.first_slot = row * plan->slot_count;
+		plan->epoch = plan->epoch == UINT32_MAX ? 1 : plan->epoch + 1;
+		plait_parallel_for(parallel, run_pieces, &run, 0, participants, 1);
+		if (participants == 2) {
+			balance(plan, run.busy[0] - run.busy[1], run.busy[0] + run.busy[1]);
+		}
 	}
 }

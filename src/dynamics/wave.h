@@ -44,7 +44,9 @@
  * and so runs ahead; with the lines set for equal shares (and moved by a region where one of two
  * threads ran longer: collisions are not spread evenly), the waits are a small part of the frame.
  * The lines must stay within the cloth through the frame (each thread has regions at every slot):
- * two threads need about slots + 2 regions; a frame that does not fit keeps the passes.
+ * two threads need about slots + 2 regions. A frame taller than that runs in rows of fewer slots
+ * alike (whole substeps), a wave in pieces each, with a barrier between rows (hang-128: 16
+ * regions, 24 slots, rows of 8); rows of fewer than PLAIT_WAVE_LEAST_ROW slots keep the passes.
  * Tried before (performance.md, sessions 20 and 21): two chunks of regions meeting in the middle
  * (they wait on each other at the cut between them every slot), the slots in two halves, one
  * behind the other (the second waits for the first at the first regions), and tiles in rows of
@@ -58,6 +60,7 @@
 #include "dynamics/sim.h"
 
 #define PLAIT_WAVE_MAX_SLOTS 96
+#define PLAIT_WAVE_LEAST_ROW 4 /* slots: the lowest rows a wave in pieces is cut into */
 
 /* A distance sweep of a block, or (block NULL) the close of `substep`. */
 typedef struct plait_wave_slot {
@@ -97,9 +100,10 @@ typedef struct plait_wave_task {
  * made once for a frame's shape and kept (plait_wave_plan_make). */
 typedef struct plait_wave_plan {
 	/* what it was made for */
-	int regions, slot_count, participants;
-	int8_t slot_shape[PLAIT_WAVE_MAX_SLOTS]; /* the sweep, or -1 for a close */
+	int regions, frame_slots, participants;
+	int8_t slot_shape[PLAIT_WAVE_MAX_SLOTS]; /* the frame's: the sweep, or -1 for a close */
 	bool made;
+	int rows, slot_count;        /* the frame's slots in rows of slot_count alike, a wave in pieces each */
 	int line[PLAIT_MAX_WORKERS]; /* [k], k >= 1: thread k's first region at slot o is line[k] + o */
 	int *list_start;
 	plait_wave_task *tasks;
