@@ -766,6 +766,20 @@ static plait_vec3 *piece_positions(int worker_count, int pins_at, int n, int sub
 	return both;
 }
 
+/* A wave world of n x n quads on one thread, the passes one after another, after `frames`. */
+static plait_vec3 *passes_positions(int n, int substeps, int iterations, int frames, int *count)
+{
+	test_grid grid;
+	plait_object_id cloth_id;
+	plait_world_id world = wave_world_sized(NULL, false, 0, n, substeps, iterations, &grid, &cloth_id);
+	cr_assert(test_step_frames(world, frames));
+	*count = grid.vertex_count;
+	plait_vec3 *both = positions_and_velocities(cloth_id, *count);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
+	return both;
+}
+
 /* (Pieces need the AVX-512 kernels, as the wave does: elsewhere both runs take the passes, and
  * the test only shows that. A frame whose workers are not all running within 10 ms takes the
  * passes too, so a loaded machine may run fewer frames in pieces; the bits must not change.) */
@@ -789,17 +803,8 @@ Test(threads, a_wave_in_pieces_gives_the_passes_bits, .timeout = 600)
 	 * rows of two substeps (each a wave in pieces, the first and the last rows entering and
 	 * leaving columns). */
 	{
-		plait_vec3 *passes6 = NULL, *pieces6 = NULL;
-		plait_thread_pool *none = NULL;
-		test_grid grid;
-		plait_object_id cloth_id;
-		plait_world_id world = wave_world_sized(none, false, 0, 100, 6, 6, &grid, &cloth_id);
-		cr_assert(test_step_frames(world, 4));
-		count = grid.vertex_count;
-		passes6 = positions_and_velocities(cloth_id, count);
-		plait_destroy_world(world);
-		test_grid_free(&grid);
-		pieces6 = piece_positions(2, 0, 100, 6, 6, 4, 0, &pieced, &count);
+		plait_vec3 *passes6 = passes_positions(100, 6, 6, 4, &count);
+		plait_vec3 *pieces6 = piece_positions(2, 0, 100, 6, 6, 4, 0, &pieced, &count);
 		cr_expect_eq(pieced > 0, columns, "rows: frames run in pieces: %lld of 4", pieced);
 		if (columns) {
 			cr_expect_gt(piece_rows, 1, "one row for 30 slots over 16 regions");
@@ -811,18 +816,7 @@ Test(threads, a_wave_in_pieces_gives_the_passes_bits, .timeout = 600)
 	}
 	/* 40 regions and 8 slots (two substeps of one sweep of each kind): lines for 2, 3 and 8
 	 * threads, and two threads' line moved every frame, 3 regions on and 1 back. */
-	plait_vec3 *passes = NULL;
-	{
-		plait_thread_pool *none = NULL;
-		test_grid grid;
-		plait_object_id cloth_id;
-		plait_world_id world = wave_world_sized(none, false, 0, 200, 2, 1, &grid, &cloth_id);
-		cr_assert(test_step_frames(world, 5));
-		count = grid.vertex_count;
-		passes = positions_and_velocities(cloth_id, count);
-		plait_destroy_world(world);
-		test_grid_free(&grid);
-	}
+	plait_vec3 *passes = passes_positions(200, 2, 1, 5, &count);
 	int workers[] = {2, 3, 8, 2};
 	for (size_t k = 0; k < sizeof workers / sizeof workers[0]; ++k) {
 		int step = k == 3 ? 3 : 0;
