@@ -280,8 +280,9 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 	memcpy(plan->slot_shape, shape, (size_t)slots);
 	plan->lean = 0.0;
 	plan->made = false;
-	/* The whole frame if the lines fit it, else rows of fewer slots alike (at least
-	 * PLAIT_WAVE_LEAST_ROW: a row ends in a barrier, as a pass does). */
+	/* The whole frame if the lines fit it, else rows of fewer slots alike; rows (the whole frame
+	 * too) of at least PLAIT_WAVE_LEAST_ROW slots, or the passes (a row ends in a barrier, as a
+	 * pass does). */
 	for (int rows = 1; rows <= slots && slots / rows >= PLAIT_WAVE_LEAST_ROW && !plan->made; ++rows) {
 		int height = slots / rows;
 		bool alike = slots % rows == 0;
@@ -359,8 +360,8 @@ static void run_pieces(void *context, int begin, int end)
 	}
 }
 
-/* The regions into columns, each by the thread that holds it halfway through the frame (the
- * pieces' shares of the regions are then about even). */
+/* The regions into columns, each by the thread that holds it halfway through a row (the pieces'
+ * shares of the regions are then about even). */
 static void enter_pieces(void *context, int begin, int end)
 {
 	piece_run *run = context;
@@ -375,7 +376,7 @@ static void enter_pieces(void *context, int begin, int end)
 }
 
 /* Two threads: the line moves a region toward the thread that ran shorter when the other has run
- * longer by more than a region's tasks over the last frames (any line gives the same bits). */
+ * longer by more than a region's tasks over the last rows (any line gives the same bits). */
 static void balance(plait_wave_plan *plan, double lean, double busy)
 {
 	plan->lean = 0.75 * plan->lean + 0.25 * lean;
