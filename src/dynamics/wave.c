@@ -278,7 +278,7 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 	plan->frame_slots = slots;
 	plan->participants = participants;
 	memcpy(plan->slot_shape, shape, (size_t)slots);
-	plan->lean = 0.0;
+	memset(plan->lean, 0, sizeof plan->lean);
 	plan->made = false;
 	/* The whole frame if the lines fit it, else rows of fewer slots alike; rows (the whole frame
 	 * too) of at least PLAIT_WAVE_LEAST_ROW slots, or the passes (a row ends in a barrier, as a
@@ -321,7 +321,6 @@ typedef struct piece_run {
 	plait_wave *wave;
 	plait_wave_plan *plan;
 	int first_slot; /* of the row */
-	double busy[2]; /* seconds the first two threads ran tasks, not waiting */
 } piece_run;
 
 /* Thread k's list; it waits only where a task needs another thread's. */
@@ -354,9 +353,7 @@ static void run_pieces(void *context, int begin, int end)
 			}
 			atomic_store_explicit(&plan->done[n], epoch, memory_order_release);
 		}
-		if (k < 2) {
-			run->busy[k] = plait_seconds() - start - waited;
-		}
+		plan->busy[k] = plait_seconds() - start - waited;
 	}
 }
 
@@ -375,33 +372,47 @@ static void enter_pieces(void *context, int begin, int end)
 	}
 }
 
-/* Two threads: the line moves a region toward the thread that ran shorter when the other has run
- * longer by more than a region's tasks over the last rows (any line gives the same bits). */
-static void balance(plait_wave_plan *plan, double lean, double busy)
+/* Moves each line a region toward balance when the threads before it ran longer (or shorter)
+ * than their share by more than a region's tasks, over the last rows (any lines give the same
+ * bits). With two threads: toward the thread that ran shorter. */
+static void balance(plait_wave_plan *plan)
 {
-	plan->lean = 0.75 * plan->lean + 0.25 * lean;
-	double column = busy / plan->regions; /* one region at every slot */
-	int step = plan->lean > column ? -1 : plan->lean < -column ? 1 : 0;
-	if (step == 0) {
-		return;
+	int participants = plan->participants;
+	double total = 0.0;
+	for (int k = 0; k < participants; ++k) {
+		total += plan->busy[k];
 	}
-	int lines[2] = {0, plan->line[1] + step};
-	if (plait_wave_plan_set_lines(plan, lines)) {
-		plan->lean = 0.0;
+	double column = total / plan->regions; /* one region at every slot */
+	int lines[PLAIT_MAX_WORKERS];
+	bool moved = false;
+	double before = 0.0;
+	for (int k = 1; k < participants; ++k) {
+		before += plan->busy[k - 1];
+		/* Twice the excess: moving the line a region changes it by about two regions' tasks. */
+		double lean = 2.0 * (before - total * k / participants);
+		plan->lean[k] = 0.75 * plan->lean[k] + 0.25 * lean;
+		int step = plan->lean[k] > column ? -1 : plan->lean[k] < -column ? 1 : 0;
+		lines[k] = plan->line[k] + step;
+		moved = moved || step != 0;
+	}
+	int kept[PLAIT_MAX_WORKERS];
+	memcpy(kept, plan->line, sizeof(int) * (size_t)participants);
+	if (moved && plait_wave_plan_set_lines(plan, lines)) {
+		for (int k = 1; k < participants; ++k) {
+			plan->lean[k] = lines[k] != kept[k] ? 0.0 : plan->lean[k];
+		}
 	}
 }
 
 void plait_wave_run_pieces(plait_wave *wave, plait_wave_plan *plan, plait_parallel *parallel)
 {
 	int participants = plan->participants;
-	piece_run run = {wave, plan, 0, {0.0, 0.0}};
+	piece_run run = {wave, plan, 0};
 	plait_parallel_for(parallel, enter_pieces, &run, 0, participants, 1);
 	for (int row = 0; row < plan->rows; ++row) {
 		run.first_slot = row * plan->slot_count;
 		plan->epoch = plan->epoch == UINT32_MAX ? 1 : plan->epoch + 1;
 		plait_parallel_for(parallel, run_pieces, &run, 0, participants, 1);
-		if (participants == 2) {
-			balance(plan, run.busy[0] - run.busy[1], run.busy[0] + run.busy[1]);
-		}
+		balance(plan);
 	}
 }

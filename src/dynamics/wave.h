@@ -41,8 +41,9 @@
  * plait_parallel_all_running). All regions go into columns before the tasks start (a close
  * reads tether anchors from columns, wherever they are).
  * Thread k only waits for thread k + 1, which starts its regions a line later in the wave's order
- * and so runs ahead; with the lines set for equal shares (and moved by a region where one of two
- * threads ran longer: collisions are not spread evenly), the waits are a small part of the frame.
+ * and so runs ahead; with the lines set for equal shares (and each moved by a region where the
+ * threads before it ran longer than their share: collisions are not spread evenly), the waits are
+ * a small part of the frame.
  * The lines must stay within the cloth through the frame (each thread has regions at every slot):
  * two threads need about slots + 2 regions. A frame taller than that runs in rows of fewer slots
  * alike (whole substeps), a wave in pieces each, with a barrier between rows (hang-128: 16
@@ -107,10 +108,11 @@ typedef struct plait_wave_plan {
 	int line[PLAIT_MAX_WORKERS]; /* [k], k >= 1: thread k's first region at slot o is line[k] + o */
 	int *list_start;
 	plait_wave_task *tasks;
-	int (*waits)[3];        /* [task]: tasks of other threads it waits for, or -1 */
-	_Atomic uint32_t *done; /* [task]: the run (epoch) it was last done in */
-	uint32_t epoch;         /* of the current run */
-	double lean;            /* two threads: how much longer thread 0 ran, smoothed (seconds) */
+	int (*waits)[3];                /* [task]: tasks of other threads it waits for, or -1 */
+	_Atomic uint32_t *done;         /* [task]: the run (epoch) it was last done in */
+	uint32_t epoch;                 /* of the current run */
+	double busy[PLAIT_MAX_WORKERS]; /* [k]: seconds thread k ran tasks in the last row, not waiting */
+	double lean[PLAIT_MAX_WORKERS]; /* [k]: how much longer threads 0..k-1 ran than their share, smoothed */
 	/* scratch while planning */
 	plait_wave_task *in_order; /* the tasks in the wave's order */
 	int (*before)[3];          /* what each waits for, in the wave's order */
@@ -134,8 +136,8 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
  * not fit the cloth or no plan was made. */
 bool plait_wave_plan_set_lines(plait_wave_plan *plan, const int *lines);
 
-/* Runs the wave as planned on the loops of `parallel` (each thread its list; the first slot's
- * regions into columns first), then moves the line between two threads toward balance. */
+/* Runs the wave as planned on the loops of `parallel` (the regions into columns first, then each
+ * row: each thread its list), moving the lines toward balance after each row. */
 void plait_wave_run_pieces(plait_wave *wave, plait_wave_plan *plan, plait_parallel *parallel);
 
 /* Whether a distance block can take part in a wave over `particle_count` particles cut into
