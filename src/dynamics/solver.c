@@ -333,9 +333,9 @@ static void frame_check_range(void *context, int begin, int end);
  * colliders still, it runs as one wave down the regions (wave.h): each region meets every pass of
  * the frame a step after the pass before, while its points, velocities and constraints are in
  * cache (one thread: hang-512 10-13% faster, hang-128 about 3%). On several threads the wave runs
- * in pieces that move a region a slot (wave.h, "Pieces"), in rows of substeps where the frame is
- * taller than the cloth has regions for (two threads, pieces over passes: hang-128 0.88,
- * hang-512 0.91-0.96, hang-256 0.92-1.05 depending on the minute). The same operations on the
+ * in pieces that move a region a slot (wave.h, "Pieces"), in rows of slots where the frame is
+ * taller than the cloth has regions for (two threads, pieces over passes: hang-512 0.89-0.97,
+ * hang-128 0.88-1.04 and hang-256 0.92-1.05 depending on the minute). The same operations on the
  * same values in an order that keeps every particle's, so the bits are the same (test_threads,
  * a_wave_gives_the_passes_bits and a_wave_in_pieces_gives_the_passes_bits). */
 

@@ -90,7 +90,9 @@ bool plait_wave_plan_reserve(plait_wave_plan *plan, const plait_allocator *alloc
 	plan->before = plait_alloc(allocator, sizeof(int[3]) * tasks);
 	plan->owner = plait_alloc(allocator, sizeof(int) * (tasks + 3 * (size_t)regions));
 	plan->position = plait_alloc(allocator, sizeof(int) * tasks);
-	plan->list_start = plait_alloc(allocator, sizeof(int) * ((size_t)participants + 1));
+	plan->list_start = plait_alloc(
+	    allocator,
+	    sizeof(int) * ((size_t)(PLAIT_WAVE_MAX_SLOTS / PLAIT_WAVE_LEAST_ROW) * (size_t)participants + 1));
 	if (plan->tasks == NULL || plan->waits == NULL || plan->done == NULL || plan->in_order == NULL ||
 	    plan->before == NULL || plan->owner == NULL || plan->position == NULL || plan->list_start == NULL) {
 		plait_wave_plan_destroy(plan, allocator);
@@ -131,9 +133,9 @@ static int owner_of(const plait_wave_plan *plan, int o, int q)
 /* The thread of a task: a region's; a cut's head that of the region after it (the head comes
  * before both regions, so the later thread runs it and the earlier waits), a tail that of the
  * region before it (after both: the earlier thread runs it and waits). */
-static int task_owner(const plait_wave_plan *plan, plait_wave_task task)
+static int task_owner(const plait_wave_plan *plan, plait_wave_task task, int row_slot)
 {
-	return owner_of(plan, task.slot, task.kind == PLAIT_WAVE_HEAD ? task.index + 1 : task.index);
+	return owner_of(plan, row_slot, task.kind == PLAIT_WAVE_HEAD ? task.index + 1 : task.index);
 }
 
 /* The particle sets a task touches: region q's own (3q), the cut q's in region q (3q + 1) and in
@@ -157,13 +159,15 @@ static int touched_sets(const plait_wave_plan *plan, plait_wave_task task, int s
 	return count;
 }
 
-/* The wave's tasks in its order (plait_wave_run's), from the plan's slot shapes. */
-static int tasks_in_order(const plait_wave_plan *plan, plait_wave_task *out)
+/* Row `row`'s tasks in the wave's order (plait_wave_run's over the row's slots), from the plan's
+ * slot shapes; their slots are the frame's. */
+static int tasks_in_order(const plait_wave_plan *plan, int row, plait_wave_task *out)
 {
-	int regions = plan->regions, slots = plan->slot_count, count = 0;
+	int regions = plan->regions, slots = plan->slot_count, first = row * slots, count = 0;
 	for (int t = 0; t < regions + slots; ++t) {
 		for (int o = 0; o < slots; ++o) {
-			int q = t - 1 - o, shape = plan->slot_shape[o];
+			int q = t - 1 - o, shape = plan->slot_shape[first + o];
+			int16_t slot = (int16_t)(first + o);
 			if (q < 0) {
 				break;
 			}
@@ -171,11 +175,11 @@ static int tasks_in_order(const plait_wave_plan *plan, plait_wave_task *out)
 				continue;
 			}
 			if (shape >= 0 && shape != PLAIT_SWEEP_FORWARD && q + 1 < regions) {
-				out[count++] = (plait_wave_task){(int16_t)o, PLAIT_WAVE_HEAD, q};
+				out[count++] = (plait_wave_task){slot, PLAIT_WAVE_HEAD, q};
 			}
-			out[count++] = (plait_wave_task){(int16_t)o, PLAIT_WAVE_REGION, q};
+			out[count++] = (plait_wave_task){slot, PLAIT_WAVE_REGION, q};
 			if (shape >= 0 && shape != PLAIT_SWEEP_BACKWARD && q > 0) {
-				out[count++] = (plait_wave_task){(int16_t)o, PLAIT_WAVE_TAIL, q - 1};
+				out[count++] = (plait_wave_task){slot, PLAIT_WAVE_TAIL, q - 1};
 			}
 		}
 	}
@@ -194,39 +198,46 @@ static bool lines_fit(const plait_wave_plan *plan)
 	return true;
 }
 
-/* Each thread's list of tasks, in the wave's order, and what each task waits for: the task before
- * it on each of its particle sets when another thread runs that one. */
+/* Each row's list of tasks for each thread (list row * participants + k), in the wave's order,
+ * and what each task waits for: the task before it in its row on each of its particle sets when
+ * another thread runs that one (rows end in a barrier). */
 static void plan_lists(plait_wave_plan *plan)
 {
-	int participants = plan->participants;
-	int count = tasks_in_order(plan, plan->in_order);
-	int *last = plan->owner + count;
-	for (int k = 0; k < 3 * plan->regions; ++k) {
-		last[k] = -1;
-	}
+	int participants = plan->participants, lists = plan->rows * participants, count = 0;
+	int *last = plan->owner + plan->task_capacity;
 	int *start = plan->list_start;
-	memset(start, 0, sizeof(int) * (size_t)(participants + 1));
-	for (int n = 0; n < count; ++n) {
-		plait_wave_task task = plan->in_order[n];
-		int sets[3], set_count = touched_sets(plan, task, sets);
-		plan->owner[n] = task_owner(plan, task);
-		start[plan->owner[n] + 1] += 1;
-		for (int k = 0; k < 3; ++k) {
-			plan->before[n][k] = k < set_count ? last[sets[k]] : -1;
+	memset(start, 0, sizeof(int) * (size_t)(lists + 1));
+	for (int row = 0; row < plan->rows; ++row) {
+		for (int k = 0; k < 3 * plan->regions; ++k) {
+			last[k] = -1;
 		}
-		for (int k = 0; k < set_count; ++k) {
-			last[sets[k]] = n;
+		int end = count + tasks_in_order(plan, row, plan->in_order + count);
+		for (int n = count; n < end; ++n) {
+			plait_wave_task task = plan->in_order[n];
+			int sets[3], set_count = touched_sets(plan, task, sets);
+			int owner = task_owner(plan, task, task.slot - row * plan->slot_count);
+			plan->owner[n] = row * participants + owner;
+			start[plan->owner[n] + 1] += 1;
+			for (int k = 0; k < 3; ++k) {
+				plan->before[n][k] = k < set_count ? last[sets[k]] : -1;
+			}
+			for (int k = 0; k < set_count; ++k) {
+				last[sets[k]] = n;
+			}
 		}
+		count = end;
 	}
-	for (int k = 0; k < participants; ++k) {
-		start[k + 1] += start[k];
+	for (int l = 0; l < lists; ++l) {
+		start[l + 1] += start[l];
 	}
-	int next[PLAIT_MAX_WORKERS];
-	memcpy(next, start, sizeof(int) * (size_t)participants);
 	for (int n = 0; n < count; ++n) {
-		plan->position[n] = next[plan->owner[n]]++;
+		plan->position[n] = start[plan->owner[n]]++;
 		plan->tasks[plan->position[n]] = plan->in_order[n];
 	}
+	for (int l = lists; l > 0; --l) {
+		start[l] = start[l - 1];
+	}
+	start[0] = 0;
 	for (int n = 0; n < count; ++n) {
 		int *waits = plan->waits[plan->position[n]];
 		for (int k = 0; k < 3; ++k) {
@@ -280,18 +291,13 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 	memcpy(plan->slot_shape, shape, (size_t)slots);
 	memset(plan->lean, 0, sizeof plan->lean);
 	plan->made = false;
-	/* The whole frame if the lines fit it, else rows of fewer slots alike; rows (the whole frame
-	 * too) of at least PLAIT_WAVE_LEAST_ROW slots, or the passes (a row ends in a barrier, as a
-	 * pass does). */
+	/* The whole frame if the lines fit it, else rows of fewer slots, all of one height; rows (the
+	 * whole frame too) of at least PLAIT_WAVE_LEAST_ROW slots, or the passes (a row ends in a
+	 * barrier, as a pass does). */
 	for (int rows = 1; rows <= slots && slots / rows >= PLAIT_WAVE_LEAST_ROW && !plan->made; ++rows) {
-		int height = slots / rows;
-		bool alike = slots % rows == 0;
-		for (int r = 1; alike && r < rows; ++r) {
-			alike = memcmp(shape, shape + r * height, (size_t)height) == 0;
-		}
-		if (alike) {
+		if (slots % rows == 0) {
 			plan->rows = rows;
-			plan->slot_count = height;
+			plan->slot_count = slots / rows;
 			plan->made = place_lines(plan);
 		}
 	}
@@ -320,7 +326,7 @@ bool plait_wave_plan_set_lines(plait_wave_plan *plan, const int *lines)
 typedef struct piece_run {
 	plait_wave *wave;
 	plait_wave_plan *plan;
-	int first_slot; /* of the row */
+	int row;
 } piece_run;
 
 /* Thread k's list; it waits only where a task needs another thread's. */
@@ -331,7 +337,8 @@ static void run_pieces(void *context, int begin, int end)
 	uint32_t epoch = plan->epoch;
 	for (int k = begin; k < end; ++k) {
 		double start = plait_seconds(), waited = 0.0;
-		for (int n = plan->list_start[k]; n < plan->list_start[k + 1]; ++n) {
+		int list = run->row * plan->participants + k;
+		for (int n = plan->list_start[list]; n < plan->list_start[list + 1]; ++n) {
 			for (int w = 0; w < 3; ++w) {
 				int before = plan->waits[n][w];
 				if (before < 0 || atomic_load_explicit(&plan->done[before], memory_order_acquire) == epoch) {
@@ -345,11 +352,10 @@ static void run_pieces(void *context, int begin, int end)
 				waited += plait_seconds() - wait_start;
 			}
 			plait_wave_task task = plan->tasks[n];
-			int slot = run->first_slot + task.slot;
 			if (task.kind == PLAIT_WAVE_REGION) {
-				run_region(run->wave, slot, task.index);
+				run_region(run->wave, task.slot, task.index);
 			} else {
-				run_cut(run->wave, slot, task.index, task.kind == PLAIT_WAVE_HEAD);
+				run_cut(run->wave, task.slot, task.index, task.kind == PLAIT_WAVE_HEAD);
 			}
 			atomic_store_explicit(&plan->done[n], epoch, memory_order_release);
 		}
@@ -410,7 +416,7 @@ void plait_wave_run_pieces(plait_wave *wave, plait_wave_plan *plan, plait_parall
 	piece_run run = {wave, plan, 0};
 	plait_parallel_for(parallel, enter_pieces, &run, 0, participants, 1);
 	for (int row = 0; row < plan->rows; ++row) {
-		run.first_slot = row * plan->slot_count;
+		run.row = row;
 		plan->epoch = plan->epoch == UINT32_MAX ? 1 : plan->epoch + 1;
 		plait_parallel_for(parallel, run_pieces, &run, 0, participants, 1);
 		balance(plan);

@@ -46,8 +46,8 @@
  * a small part of the frame.
  * The lines must stay within the cloth through the frame (each thread has regions at every slot):
  * two threads need about slots + 2 regions. A frame taller than that runs in rows of fewer slots
- * alike (whole substeps), a wave in pieces each, with a barrier between rows (hang-128: 16
- * regions, 24 slots, rows of 8); rows of fewer than PLAIT_WAVE_LEAST_ROW slots keep the passes.
+ * (all of one height), a wave in pieces each, with a barrier between rows (hang-128: 16 regions,
+ * 24 slots, two rows of 12); rows of fewer than PLAIT_WAVE_LEAST_ROW slots keep the passes.
  * Tried before (performance.md, sessions 20 and 21): two chunks of regions meeting in the middle
  * (they wait on each other at the cut between them every slot), the slots in two halves, one
  * behind the other (the second waits for the first at the first regions), and tiles in rows of
@@ -97,14 +97,15 @@ typedef struct plait_wave_task {
 	int32_t index; /* region or cut */
 } plait_wave_task;
 
-/* A wave's tasks in a list per thread (thread k's: [list_start[k], list_start[k + 1]) of tasks),
- * made once for a frame's shape and kept (plait_wave_plan_make). */
+/* A wave's tasks in a list per row and thread (row r, thread k: list l = r * participants + k,
+ * [list_start[l], list_start[l + 1]) of tasks), made once for a frame's shape and kept
+ * (plait_wave_plan_make). */
 typedef struct plait_wave_plan {
 	/* what it was made for */
 	int regions, frame_slots, participants;
 	int8_t slot_shape[PLAIT_WAVE_MAX_SLOTS]; /* the frame's: the sweep, or -1 for a close */
 	bool made;
-	int rows, slot_count;        /* the frame's slots in rows of slot_count alike, a wave in pieces each */
+	int rows, slot_count;        /* the frame's slots in rows of slot_count, a wave in pieces each */
 	int line[PLAIT_MAX_WORKERS]; /* [k], k >= 1: thread k's first region at slot o is line[k] + o */
 	int *list_start;
 	plait_wave_task *tasks;
