@@ -800,9 +800,9 @@ Test(threads, a_wave_in_pieces_gives_the_passes_bits, .timeout = 600)
 		free(pieces);
 	}
 	/* 16 regions and 6 substeps of 4 slots (stretch, shear, bend, close): two threads' lines do
-	 * not fit the frame's 24 slots, so it runs in rows of three substeps, each a wave in pieces
-	 * (the rows' sweeps differ: shear and bend alternate direction; the regions enter columns
-	 * before the first row, and leave after the last one's last slot). */
+	 * not fit the frame's 24 slots, so it runs in rows (of one substep: a quarter of the regions),
+	 * each a wave in pieces (the rows' sweeps differ: shear and bend alternate direction; the
+	 * regions enter columns before the first row, and leave after the last one's last slot). */
 	{
 		plait_vec3 *passes6 = passes_positions(100, 6, 6, 4, &count);
 		plait_vec3 *pieces6 = piece_positions(2, 0, 100, 6, 6, 4, 0, &pieced, &count);

@@ -46,8 +46,9 @@
  * a small part of the frame.
  * The lines must stay within the cloth through the frame (each thread has regions at every slot):
  * two threads need about slots + 2 regions. A frame taller than that runs in rows of fewer slots
- * (all of one height), a wave in pieces each, with a barrier between rows (hang-128: 16 regions,
- * 24 slots, two rows of 12); rows of fewer than PLAIT_WAVE_LEAST_ROW slots keep the passes.
+ * (all of one height, preferably at most a quarter of the regions: wave.c), a wave in pieces
+ * each, with a barrier between rows (hang-128: 16 regions, 24 slots, six rows of 4); rows of
+ * fewer than PLAIT_WAVE_LEAST_ROW slots keep the passes.
  * Tried before (performance.md, sessions 20 and 21): two chunks of regions meeting in the middle
  * (they wait on each other at the cut between them every slot), the slots in two halves, one
  * behind the other (the second waits for the first at the first regions), and tiles in rows of
