@@ -38,14 +38,20 @@ static void run_region(plait_wave *wave, int o, int q)
 	}
 }
 
-/* Whether slot o has a head (a boundary swept before the regions) or a tail (after them). */
-static bool has_head(const plait_wave *wave, int o)
+/* A slot's shape: its sweep, or -1 for a close. The one rule for both the wave on one thread and
+ * the plan of its pieces: a sweep other than forward has a head (a boundary swept before the
+ * regions), one other than backward a tail (after them). */
+static int slot_shape(const plait_wave *wave, int o)
 {
-	return wave->slots[o].block != NULL && wave->slots[o].sweep != PLAIT_SWEEP_FORWARD;
+	return wave->slots[o].block == NULL ? -1 : (int)wave->slots[o].sweep;
 }
-static bool has_tail(const plait_wave *wave, int o)
+static bool shape_has_head(int shape)
 {
-	return wave->slots[o].block != NULL && wave->slots[o].sweep != PLAIT_SWEEP_BACKWARD;
+	return shape >= 0 && shape != PLAIT_SWEEP_FORWARD;
+}
+static bool shape_has_tail(int shape)
+{
+	return shape >= 0 && shape != PLAIT_SWEEP_BACKWARD;
 }
 
 void plait_wave_run(plait_wave *wave)
@@ -64,11 +70,11 @@ void plait_wave_run(plait_wave *wave)
 			if (q >= regions) {
 				continue;
 			}
-			if (has_head(wave, o) && q + 1 < regions) {
+			if (shape_has_head(slot_shape(wave, o)) && q + 1 < regions) {
 				run_cut(wave, o, q, true);
 			}
 			run_region(wave, o, q);
-			if (has_tail(wave, o) && q > 0) {
+			if (shape_has_tail(slot_shape(wave, o)) && q > 0) {
 				run_cut(wave, o, q - 1, false);
 			}
 		}
@@ -174,11 +180,11 @@ static int tasks_in_order(const plait_wave_plan *plan, int row, plait_wave_task 
 			if (q >= regions) {
 				continue;
 			}
-			if (shape >= 0 && shape != PLAIT_SWEEP_FORWARD && q + 1 < regions) {
+			if (shape_has_head(shape) && q + 1 < regions) {
 				out[count++] = (plait_wave_task){slot, PLAIT_WAVE_HEAD, q};
 			}
 			out[count++] = (plait_wave_task){slot, PLAIT_WAVE_REGION, q};
-			if (shape >= 0 && shape != PLAIT_SWEEP_BACKWARD && q > 0) {
+			if (shape_has_tail(shape) && q > 0) {
 				out[count++] = (plait_wave_task){slot, PLAIT_WAVE_TAIL, q - 1};
 			}
 		}
@@ -270,6 +276,19 @@ static bool place_lines(plait_wave_plan *plan)
 	return lines_fit(plan);
 }
 
+/* The frame's slots in `rows` rows of one height (at least PLAIT_WAVE_LEAST_ROW), lines placed;
+ * whether they fit. */
+static bool try_rows(plait_wave_plan *plan, int rows)
+{
+	int slots = plan->frame_slots;
+	if (slots % rows != 0 || slots / rows < PLAIT_WAVE_LEAST_ROW) {
+		return false;
+	}
+	plan->rows = rows;
+	plan->slot_count = slots / rows;
+	return place_lines(plan);
+}
+
 bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int participants)
 {
 	int slots = wave->slot_count, regions = wave->regions;
@@ -279,7 +298,7 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 	}
 	int8_t shape[PLAIT_WAVE_MAX_SLOTS];
 	for (int o = 0; o < slots; ++o) {
-		shape[o] = (int8_t)(wave->slots[o].block == NULL ? -1 : (int)wave->slots[o].sweep);
+		shape[o] = (int8_t)slot_shape(wave, o);
 	}
 	if (plan->regions == regions && plan->frame_slots == slots && plan->participants == participants &&
 	    memcmp(plan->slot_shape, shape, (size_t)slots) == 0) {
@@ -298,19 +317,11 @@ bool plait_wave_plan_make(plait_wave_plan *plan, const plait_wave *wave, int par
 	 * 8 and slower in rows of 4. The shortest such rows that the lines fit first, then taller. */
 	int tallest = regions / 4 > PLAIT_WAVE_LEAST_ROW ? regions / 4 : PLAIT_WAVE_LEAST_ROW;
 	int fewest = (slots + tallest - 1) / tallest;
-	for (int rows = fewest; rows <= slots && slots / rows >= PLAIT_WAVE_LEAST_ROW && !plan->made; ++rows) {
-		if (slots % rows == 0) {
-			plan->rows = rows;
-			plan->slot_count = slots / rows;
-			plan->made = place_lines(plan);
-		}
+	for (int rows = fewest; rows <= slots && !plan->made; ++rows) {
+		plan->made = try_rows(plan, rows);
 	}
 	for (int rows = fewest - 1; rows >= 1 && !plan->made; --rows) {
-		if (slots % rows == 0 && slots / rows >= PLAIT_WAVE_LEAST_ROW) {
-			plan->rows = rows;
-			plan->slot_count = slots / rows;
-			plan->made = place_lines(plan);
-		}
+		plan->made = try_rows(plan, rows);
 	}
 	if (plan->made) {
 		plan_lists(plan);
