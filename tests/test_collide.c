@@ -1073,6 +1073,107 @@ Test(collide, a_short_list_holds_the_pairs_in_contact_and_those_whose_paths_met)
 	plait_destroy_world(world);
 }
 
+/* The listed pairs of a fine sheet against every pair there is (tally_short): those in contact
+ * now, and whether they push, and those whose paths this substep met. */
+static short_tally tally_against_every_pair(plait_mesh_contacts *mc, plait_object_id cloth,
+                                            const plait_particles *p)
+{
+	unsigned long long *listed = malloc(sizeof *listed * (size_t)(mc->pair_count > 0 ? mc->pair_count : 1));
+	for (int k = 0; k < mc->pair_count; ++k) {
+		listed[k] = pair_key(mc->pairs[k].type, mc->pairs[k].v);
+	}
+	qsort(listed, (size_t)mc->pair_count, sizeof *listed, compare_keys);
+	int triangles = plait_object_get_triangles(cloth, NULL, 0);
+	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
+	plait_object_get_triangles(cloth, tri, triangles);
+	int first = mc->elements[0].v[0] - tri[0];
+	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0, p};
+	visit_every_pair(tri, triangles, first, p->count, tally_short, &tally);
+	free(tri);
+	free(listed);
+	tally.keys = NULL;
+	return tally;
+}
+
+/* Past its window (LIST_SUBSTEPS substeps after its gather) a list that serves on keeps
+ * serving while its vertices rest where their paths ended, and is mended around those that
+ * leave (mesh_contact_listing.c, path_at): a resting pile is not gathered again every other
+ * substep. A fine sheet folded in two, both halves moving down together 25 mm a substep at the
+ * gather, the upper 10.5 mm over the lower (out of contact, in reach):
+ * - four substeps past the window, with every vertex at its path's end give or take 0.8 of its
+ *   guard (the halves closer by about a millimetre, into contact), the list still covers and
+ *   holds every pair in contact;
+ * - then a corner of the upper half drops 25 mm through the lower one in one substep while the
+ *   rest stays: the list is mended around it and holds every pair in contact or whose paths met
+ *   (the lower half's paths stopped at the window: its motion at the gather, the same as the
+ *   corner's now, must not be taken off the corner's);
+ * - a substep later, with nothing moving, the corner rests at its new place without straying. */
+Test(collide, a_list_past_its_window_serves_resting_vertices_and_is_mended_around_moving_ones)
+{
+	plait_world_id world;
+	plait_object_id cloth;
+	plait_mesh_contacts *mc = fine_sheet(&world, 0.005f, &cloth);
+	plait_sim *sim = &world.world->sim;
+	plait_particles *p = &sim->particles;
+	vec3 u = v3(0.0f, -0.025f, 0.0f);
+	for (int i = 0; i < p->count; ++i) {
+		vec3 s = p->x_start[i];
+		vec3 x = s.x > 0.0f ? v3(-s.x, 0.0105f, s.z) : s;
+		p->point[i].x = x;
+		p->x_prev[i] = v3_sub(x, u);
+	}
+	mc->cull_flat = false; /* flat halves: this test is of the list, so it walks them */
+	mc->short_lists = false;
+	plait_mesh_contacts_gather(sim, mc);
+	cr_assert_eq(mc->list_serves, LIST_SUBSTEPS);
+	mc->substep_serial = mc->gather_serial + LIST_SUBSTEPS + 4;
+	for (int i = 0; i < p->count; ++i) {
+		bool upper = p->x_start[i].x > 0.0f;
+		vec3 end = v3_mul_add(mc->x_gather[i], (float)LIST_SUBSTEPS, mc->motion[i]);
+		vec3 toward = v3(0.0f, (upper ? -0.8f : 0.8f) * mc->guard[i], 0.0f);
+		p->x_prev[i] = v3_mul_add(end, 0.5f, toward);
+		p->point[i].x = v3_add(end, toward);
+	}
+	cr_assert(plait_mesh_contacts_list_covers(sim, mc), "the list stopped covering vertices at rest");
+	short_tally rest = tally_against_every_pair(mc, cloth, p);
+	cr_expect_gt(rest.in_contact, 200, "only %d pairs in contact", rest.in_contact);
+	cr_expect_eq(rest.contact_missing, 0, "%d of %d pairs in contact not listed", rest.contact_missing,
+	             rest.in_contact);
+	/* A corner of the upper half drops through the lower one. */
+	mc->substep_serial += 1;
+	int dropped = 0;
+	for (int i = 0; i < p->count; ++i) {
+		vec3 s = p->x_start[i];
+		p->x_prev[i] = p->point[i].x;
+		if (s.x > 0.02f && s.z > 0.03f) {
+			p->point[i].x = v3_add(p->point[i].x, u);
+			dropped += 1;
+		}
+	}
+	memset(mc->around, 0, (size_t)p->count);
+	int strays = 0;
+	cr_assert(plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays));
+	cr_assert_eq(strays, dropped, "%d strays, %d vertices dropped", strays, dropped);
+	cr_assert(plait_mesh_contacts_few_strays(strays, p->count), "%d strays of %d: not few", strays, p->count);
+	plait_mesh_contacts_relist_around(sim, mc);
+	memset(mc->around, 0, (size_t)p->count);
+	short_tally mended = tally_against_every_pair(mc, cloth, p);
+	cr_expect_gt(mended.paths_meet, 20, "only %d pairs' paths met", mended.paths_meet);
+	cr_expect_eq(mended.paths_missing, 0, "%d of %d pairs whose paths met not listed", mended.paths_missing,
+	             mended.paths_meet);
+	cr_expect_eq(mended.contact_missing, 0, "%d of %d pairs in contact not listed", mended.contact_missing,
+	             mended.in_contact);
+	/* Nothing moves in the next substep. */
+	mc->substep_serial += 1;
+	for (int i = 0; i < p->count; ++i) {
+		p->x_prev[i] = p->point[i].x;
+	}
+	strays = 0;
+	cr_expect(plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays));
+	cr_expect_eq(strays, 0, "%d vertices strayed at rest after mending", strays);
+	plait_destroy_world(world);
+}
+
 /* A sheet at rest and one moving into it at 1 m/s, weightless: who moves depends on layers. */
 static void push_between_layers(int resting_layer, int moving_layer, float *resting_moved, float *moving_end)
 {

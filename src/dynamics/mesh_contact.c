@@ -68,6 +68,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->path_lower);
 	plait_free(a, mc->path_upper);
 	plait_free(a, mc->motion);
+	plait_free(a, mc->path_end);
 	plait_free(a, mc->around);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);

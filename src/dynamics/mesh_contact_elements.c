@@ -337,6 +337,7 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->path_lower);
 	plait_free(a, mc->path_upper);
 	plait_free(a, mc->motion);
+	plait_free(a, mc->path_end);
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	plait_free(a, mc->around);
@@ -347,6 +348,7 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->path_lower = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->path_upper = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->motion = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->path_end = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->guard = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->object_of = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->list_valid = false;
@@ -355,8 +357,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	mc->members = plait_alloc_zero(a, (size_t)count, sizeof *mc->members);
 	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
 	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->path_lower == NULL ||
-	    mc->path_upper == NULL || mc->motion == NULL || mc->guard == NULL || mc->object_of == NULL ||
-	    mc->around == NULL) {
+	    mc->path_upper == NULL || mc->motion == NULL || mc->path_end == NULL || mc->guard == NULL ||
+	    mc->object_of == NULL || mc->around == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

@@ -224,6 +224,9 @@ typedef struct plait_mesh_contacts {
 	 * gather's (plait_mesh_contacts_gather, plait_mesh_contacts_list_covers). */
 	vec3 *x_gather;
 	vec3 *motion; /* per particle: its motion over the gather's substep, start to gather */
+	/* per particle: the substep (counted from the gather's, as `since` in list_holds) where its
+	 * path stops: it runs x_gather + s motion up to there and stays at its end after. */
+	float *path_end;
 	float *guard; /* per particle: how far it may stray from that path */
 	/* The paths the flat patches were last fitted to, and for which traversal (STAGE_GATHER:
 	 * the list's paths above, over the substeps it serves, without their guards: the failsafe

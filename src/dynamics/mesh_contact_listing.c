@@ -30,6 +30,19 @@ typedef struct box_job {
 
 #define FIT_BOX_GRAIN 2048
 
+/* Particle i's motion a substep along its path over the substep `since` (counted from the
+ * gather's): mc->motion while its path runs, none once it stopped (mc->path_end). */
+static vec3 path_motion(const plait_mesh_contacts *mc, int i, float since)
+{
+	return mc->path_end[i] >= since ? mc->motion[i] : v3(0.0f, 0.0f, 0.0f);
+}
+
+/* Where particle i's path is at substep s (counted from the gather's). */
+static vec3 path_at(const plait_mesh_contacts *mc, int i, float s)
+{
+	return v3_mul_add(mc->x_gather[i], plait_minf(s, mc->path_end[i]), mc->motion[i]);
+}
+
 static void fit_box_range(void *context, int begin, int end)
 {
 	const box_job *job = context;
@@ -37,23 +50,29 @@ static void fit_box_range(void *context, int begin, int end)
 	plait_mesh_contacts *mc = job->mc;
 	bool paths = job->paths;
 	const plait_particles *p = &sim->particles;
+	float since = (float)(mc->substep_serial - mc->gather_serial);
 	for (int e = begin; e < end; ++e) {
 		const element *el = &mc->elements[e];
 		vec3 lower = p->point[el->v[0]].x, upper = lower;
 		float radius = 0.0f, guard = 0.0f;
 		if (!paths) {
 			/* The element's motion and spread: the mean of its vertices' and the largest
-			 * distance from it. */
-			vec3 mean = mc->motion[el->v[0]];
+			 * distance from it. A vertex whose path stopped before this substep moves no
+			 * more (path_motion). */
+			vec3 motion[3] = {{0}};
+			for (int k = 0; k < el->size; ++k) {
+				motion[k] = path_motion(mc, el->v[k], since);
+			}
+			vec3 mean = motion[0];
 			for (int k = 1; k < el->size; ++k) {
-				mean = v3_add(mean, mc->motion[el->v[k]]);
+				mean = v3_add(mean, motion[k]);
 			}
 			mean = v3_scale(mean, 1.0f / (float)el->size);
 			/* One square root: it is monotonic, so the root of the largest square is the
 			 * largest root. */
 			float spread_sq = 0.0f;
 			for (int k = 0; k < el->size; ++k) {
-				vec3 d = v3_sub(mc->motion[el->v[k]], mean);
+				vec3 d = v3_sub(motion[k], mean);
 				spread_sq = plait_maxf(spread_sq, v3_dot(d, d));
 			}
 			mc->element_motion[e] = mean;
@@ -108,6 +127,18 @@ static void path_box_range(void *context, int begin, int end)
 	const box_job *job = context;
 	plait_mesh_contacts *mc = job->mc;
 	float serves = (float)mc->list_serves;
+	long since = mc->substep_serial - mc->gather_serial;
+	if (since > mc->list_serves) {
+		/* Past the list's window (a resting list, list_holds) every path stops by this substep:
+		 * the box of its last stretch, in place (not relative to its object, which need not
+		 * move on as it did at the gather; the objects' allowance still widens queries). */
+		for (int i = begin; i < end; ++i) {
+			vec3 a = path_at(mc, i, (float)(since - 1)), b = path_at(mc, i, (float)since);
+			mc->path_lower[i] = v3_min(a, b);
+			mc->path_upper[i] = v3_max(a, b);
+		}
+		return;
+	}
 	for (int i = begin; i < end; ++i) {
 		int o = mc->object_of[i];
 		vec3 mean = o >= 0 ? mc->shift[o] : v3(0.0f, 0.0f, 0.0f); /* minus the object's */
@@ -346,6 +377,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	for (int i = 0; i < p->count; ++i) {
 		mc->x_gather[i] = p->point[i].x;
 		mc->motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
+		mc->path_end[i] = (float)LIST_SUBSTEPS;
 	}
 	object_shifts(sim, mc, p->x_prev, true); /* minus each object's mean motion */
 	float bend = path_bend(sim);
@@ -422,9 +454,8 @@ static void holds_range(void *context, int begin, int end)
 		bool out = false;
 		for (int when = 0; when < 2 && !out; ++when) {
 			/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
-			float along = (float)(job->since - 1 + when);
 			vec3 x = when == 0 ? p->x_prev[i] : p->point[i].x;
-			vec3 stray = v3_sub(x, v3_mul_add(mc->x_gather[i], along, mc->motion[i]));
+			vec3 stray = v3_sub(x, path_at(mc, i, (float)(job->since - 1 + when)));
 			out = v3_length_sq(stray) > mc->guard[i] * mc->guard[i];
 		}
 		if (out) {
@@ -446,7 +477,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 		return false;
 	}
 	long since = mc->substep_serial - mc->gather_serial;
-	if (since < 0 || since > LIST_SUBSTEPS) {
+	if (since < 0 || (mc->list_serves == 0 && since > LIST_SUBSTEPS)) {
 		return false;
 	}
 	const plait_particles *p = &sim->particles;
@@ -474,7 +505,9 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	/* The paths held (as far as a list that served on would need), but a short list does not
 	 * reach past its own substep. */
 	mc->paths_kept = strays == 0 || plait_mesh_contacts_few_strays(strays, p->count);
-	return since <= mc->list_serves;
+	/* A list that serves on keeps serving past its window while its vertices rest at their
+	 * paths' ends (path_at), and is mended around those that leave them. */
+	return mc->list_serves > 0 || since <= 0;
 }
 
 bool plait_mesh_contacts_list_covers(plait_sim *sim, plait_mesh_contacts *mc)
@@ -536,7 +569,10 @@ void plait_mesh_contacts_query_around_element(const plait_sim *sim, const plait_
 			continue;
 		}
 		const collision_object *ob = &mc->objects[b];
-		float margin = with_allowance && b != a ? mc->allowance[a * mc->object_count + b] : 0.0f;
+		/* Past the list's window the boxes are in place, not relative to their objects
+		 * (path_box_range): no allowance between objects. */
+		bool relative = mc->substep_serial - mc->gather_serial <= mc->list_serves;
+		float margin = with_allowance && relative && b != a ? mc->allowance[a * mc->object_count + b] : 0.0f;
 		around_query query = {context, mc, e, ob->first, visit};
 		plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first, mc->lower[e],
 		                         mc->upper[e], margin, visit_around, &query);
@@ -568,6 +604,9 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		if (mc->around[i]) {
 			mc->motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
 			mc->x_gather[i] = v3_mul_add(p->point[i].x, -since, mc->motion[i]);
+			/* Past the list's window the others' paths have stopped, and so does this one,
+			 * where it is now: its listing still covers the motion of this substep. */
+			mc->path_end[i] = since > (float)mc->list_serves ? since : (float)LIST_SUBSTEPS;
 			mc->guard[i] = path_guard(sim, mc, i, bend);
 		}
 	}
@@ -600,6 +639,8 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		object_pass objects = {&pass, 0, 0};
 		plait_mesh_contacts_query_around(sim, mc, true, plait_mesh_contacts_visit_object_elements, &objects);
 	}
+	mc->features_kept = pass.features_kept; /* over the element pairs the mending met */
+	mc->features_left_out = pass.features_left_out;
 	mc->list_valid = !mc->out_of_memory;
 }
 
