@@ -21,7 +21,7 @@ void portable_tree_pairs(const plait_element_tree *tree, const vec3 *lower, cons
                          plait_element_pair_visitor *visit, void *context);
 void portable_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
                                  const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b,
-                                 float margin, const plait_node_skip *skip, plait_element_pair_visitor *visit,
+                                 vec3 margin, const plait_node_skip *skip, plait_element_pair_visitor *visit,
                                  void *context);
 
 /* A small deterministic generator (the test must not depend on the libc's rand). */
@@ -49,10 +49,10 @@ static void random_boxes(unsigned seed, int count, float spread, float size, vec
 	}
 }
 
-static bool meet(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
+static bool meet(vec3 la, vec3 ua, vec3 lb, vec3 ub, vec3 margin)
 {
-	return la.x <= ub.x + margin && lb.x <= ua.x + margin && la.y <= ub.y + margin && lb.y <= ua.y + margin &&
-	       la.z <= ub.z + margin && lb.z <= ua.z + margin;
+	return la.x <= ub.x + margin.x && lb.x <= ua.x + margin.x && la.y <= ub.y + margin.y &&
+	       lb.y <= ua.y + margin.y && la.z <= ub.z + margin.z && lb.z <= ua.z + margin.z;
 }
 
 typedef struct pair_record {
@@ -88,7 +88,7 @@ Test(element_tree, self_pairs_are_every_pair_that_meets_once)
 		int expected = 0;
 		for (int a = 0; a < count; ++a) {
 			for (int b = a + 1; b < count; ++b) {
-				bool should = meet(lower[a], upper[a], lower[b], upper[b], 0.0f);
+				bool should = meet(lower[a], upper[a], lower[b], upper[b], v3(0.0f, 0.0f, 0.0f));
 				int times = r.seen[a * count + b] + r.seen[b * count + a];
 				cr_assert_eq(times, should ? 1 : 0, "%d boxes: pair (%d, %d) reported %d times, meets: %d",
 				             count, a, b, times, should);
@@ -118,16 +118,20 @@ Test(element_tree, pairs_between_trees_within_the_margin)
 	cr_assert(plait_element_tree_build(&b, &heap, cb, count_b));
 	plait_element_tree_refit(&a, la, ua);
 	plait_element_tree_refit(&b, lb, ub);
-	const float margins[] = {0.0f, 1.0f / 64.0f, 0.1f};
-	for (int m = 0; m < 3; ++m) {
+	/* Each axis its own margin too (a tree moving against the other along one axis). */
+	const vec3 margins[] = {{0.0f, 0.0f, 0.0f},
+	                        {1.0f / 64.0f, 1.0f / 64.0f, 1.0f / 64.0f},
+	                        {0.1f, 0.1f, 0.1f},
+	                        {0.0f, 0.2f, 0.0f},
+	                        {0.05f, 0.0f, 0.15f}};
+	for (int m = 0; m < 5; ++m) {
 		pair_record r = {count_a, count_b, calloc((size_t)count_a * (size_t)count_b, 1), 0};
 		plait_element_tree_pairs_between(&a, la, ua, &b, lb, ub, margins[m], NULL, record, &r);
 		for (int i = 0; i < count_a; ++i) {
 			for (int j = 0; j < count_b; ++j) {
 				bool should = meet(la[i], ua[i], lb[j], ub[j], margins[m]);
 				cr_assert_eq(r.seen[i * count_b + j], should ? 1 : 0,
-				             "margin %g: pair (%d, %d) reported %d times", (double)margins[m], i, j,
-				             r.seen[i * count_b + j]);
+				             "margins %d: pair (%d, %d) reported %d times", m, i, j, r.seen[i * count_b + j]);
 			}
 		}
 		free(r.seen);
@@ -182,8 +186,10 @@ Test(element_tree, visits_come_in_the_portable_codes_order)
 	portable_tree_pairs(&tree, lower, upper, log_pair, &want);
 	expect_same_visits(&got, &want, "self");
 	got.count = want.count = 0;
-	plait_element_tree_pairs_between(&tree, lower, upper, &other, lb, ub, 0.02f, NULL, log_pair, &got);
-	portable_tree_pairs_between(&tree, lower, upper, &other, lb, ub, 0.02f, NULL, log_pair, &want);
+	plait_element_tree_pairs_between(&tree, lower, upper, &other, lb, ub, v3(0.02f, 0.01f, 0.03f), NULL,
+	                                 log_pair, &got);
+	portable_tree_pairs_between(&tree, lower, upper, &other, lb, ub, v3(0.02f, 0.01f, 0.03f), NULL, log_pair,
+	                            &want);
 	expect_same_visits(&got, &want, "between");
 	free(got.pairs);
 	free(want.pairs);

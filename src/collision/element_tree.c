@@ -151,11 +151,11 @@ void plait_element_tree_refit(plait_element_tree *tree, const vec3 *lower, const
 	}
 }
 
-/* Whether two boxes come within `margin` of each other. */
-static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
+/* Whether two boxes come within `margin` of each other, along each axis its own. */
+static bool boxes_overlap(vec3 la, vec3 ua, vec3 lb, vec3 ub, vec3 margin)
 {
-	return la.x <= ub.x + margin && lb.x <= ua.x + margin && la.y <= ub.y + margin && lb.y <= ua.y + margin &&
-	       la.z <= ub.z + margin && lb.z <= ua.z + margin;
+	return la.x <= ub.x + margin.x && lb.x <= ua.x + margin.x && la.y <= ub.y + margin.y &&
+	       lb.y <= ua.y + margin.y && la.z <= ub.z + margin.z && lb.z <= ua.z + margin.z;
 }
 
 /* Median splits halve the element count at every level, so no tree is deeper than 32 levels;
@@ -185,7 +185,7 @@ typedef struct leaf_lanes {
 } leaf_lanes;
 
 static leaf_lanes leaf_lanes_of(const plait_element_tree *tree, const plait_tree_node *leaf,
-                                const vec3 *lower, const vec3 *upper, float margin)
+                                const vec3 *lower, const vec3 *upper, vec3 margin)
 {
 	_Alignas(16) float l[3][4], u[3][4];
 	for (int k = 0; k < 4; ++k) {
@@ -199,9 +199,9 @@ static leaf_lanes leaf_lanes_of(const plait_element_tree *tree, const plait_tree
 		l[0][k] = lower[e].x;
 		l[1][k] = lower[e].y;
 		l[2][k] = lower[e].z;
-		u[0][k] = upper[e].x + margin;
-		u[1][k] = upper[e].y + margin;
-		u[2][k] = upper[e].z + margin;
+		u[0][k] = upper[e].x + margin.x;
+		u[1][k] = upper[e].y + margin.y;
+		u[2][k] = upper[e].z + margin.z;
 	}
 	return (leaf_lanes){_mm_load_ps(l[0]), _mm_load_ps(l[1]), _mm_load_ps(l[2]),
 	                    _mm_load_ps(u[0]), _mm_load_ps(u[1]), _mm_load_ps(u[2])};
@@ -209,14 +209,14 @@ static leaf_lanes leaf_lanes_of(const plait_element_tree *tree, const plait_tree
 
 /* Bit k set when element e's box meets lane k's: the comparisons of boxes_overlap, four at a
  * time (the same sums, so the same answers). */
-static int leaf_lanes_meet(const leaf_lanes *b, vec3 lower, vec3 upper, float margin)
+static int leaf_lanes_meet(const leaf_lanes *b, vec3 lower, vec3 upper, vec3 margin)
 {
 	__m128 meet = _mm_and_ps(_mm_cmple_ps(_mm_set1_ps(lower.x), b->ux),
-	                         _mm_cmple_ps(b->lx, _mm_set1_ps(upper.x + margin)));
+	                         _mm_cmple_ps(b->lx, _mm_set1_ps(upper.x + margin.x)));
 	meet = _mm_and_ps(meet, _mm_cmple_ps(_mm_set1_ps(lower.y), b->uy));
-	meet = _mm_and_ps(meet, _mm_cmple_ps(b->ly, _mm_set1_ps(upper.y + margin)));
+	meet = _mm_and_ps(meet, _mm_cmple_ps(b->ly, _mm_set1_ps(upper.y + margin.y)));
 	meet = _mm_and_ps(meet, _mm_cmple_ps(_mm_set1_ps(lower.z), b->uz));
-	meet = _mm_and_ps(meet, _mm_cmple_ps(b->lz, _mm_set1_ps(upper.z + margin)));
+	meet = _mm_and_ps(meet, _mm_cmple_ps(b->lz, _mm_set1_ps(upper.z + margin.z)));
 	return _mm_movemask_ps(meet);
 }
 #endif
@@ -226,7 +226,7 @@ static int leaf_lanes_meet(const leaf_lanes *b, vec3 lower, vec3 upper, float ma
  * at random, so four are made at once, without a branch each (SSE2). */
 static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *a, const vec3 *lower_a,
                        const vec3 *upper_a, const plait_element_tree *tree_b, const plait_tree_node *b,
-                       const vec3 *lower_b, const vec3 *upper_b, float margin,
+                       const vec3 *lower_b, const vec3 *upper_b, vec3 margin,
                        plait_element_pair_visitor *visit, void *context)
 {
 	bool same = a == b;
@@ -267,7 +267,7 @@ static void leaf_pairs(const plait_element_tree *tree_a, const plait_tree_node *
  * says so. */
 static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const vec3 *upper_a,
                     const plait_element_tree *tree_b, const vec3 *lower_b, const vec3 *upper_b, bool self,
-                    float margin, int start_a, int start_b, const plait_node_skip *skip,
+                    vec3 margin, int start_a, int start_b, const plait_node_skip *skip,
                     plait_element_pair_visitor *visit, void *context, int depth, int (*pieces)[2],
                     int capacity)
 {
@@ -334,21 +334,21 @@ static int traverse(const plait_element_tree *tree_a, const vec3 *lower_a, const
 void plait_element_tree_pairs(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                               plait_element_pair_visitor *visit, void *context)
 {
-	(void)traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, 0, 0, NULL, visit, context, 0, NULL,
-	               0);
+	(void)traverse(tree, lower, upper, tree, lower, upper, true, v3(0.0f, 0.0f, 0.0f), 0, 0, NULL, visit,
+	               context, 0, NULL, 0);
 }
 
 void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
                                        const plait_node_skip *skip, plait_element_pair_visitor *visit,
                                        void *context)
 {
-	(void)traverse(tree, lower, upper, tree, lower, upper, true, 0.0f, 0, 0, skip, visit, context, 0, NULL,
-	               0);
+	(void)traverse(tree, lower, upper, tree, lower, upper, true, v3(0.0f, 0.0f, 0.0f), 0, 0, skip, visit,
+	               context, 0, NULL, 0);
 }
 
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
                                       const vec3 *upper_a, const plait_element_tree *tree_b,
-                                      const vec3 *lower_b, const vec3 *upper_b, float margin,
+                                      const vec3 *lower_b, const vec3 *upper_b, vec3 margin,
                                       const plait_node_skip *skip, plait_element_pair_visitor *visit,
                                       void *context)
 {
@@ -357,7 +357,7 @@ void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const ve
 }
 
 int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
-                             float margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
+                             vec3 margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
                              int capacity)
 {
 	return traverse(tree_a, NULL, NULL, tree_b, NULL, NULL, self, margin, 0, 0, skip, NULL, NULL, depth,
@@ -366,7 +366,7 @@ int plait_element_tree_split(const plait_element_tree *tree_a, const plait_eleme
 
 void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3 *lower_a,
                                     const vec3 *upper_a, const plait_element_tree *tree_b,
-                                    const vec3 *lower_b, const vec3 *upper_b, bool self, float margin,
+                                    const vec3 *lower_b, const vec3 *upper_b, bool self, vec3 margin,
                                     const plait_node_skip *skip, const int piece[2],
                                     plait_element_pair_visitor *visit, void *context)
 {
@@ -374,14 +374,14 @@ void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3
 	               visit, context, 0, NULL, 0);
 }
 
-static bool boxes_within(vec3 la, vec3 ua, vec3 lb, vec3 ub, float margin)
+static bool boxes_within(vec3 la, vec3 ua, vec3 lb, vec3 ub, vec3 margin)
 {
-	return la.x - ub.x <= margin && lb.x - ua.x <= margin && la.y - ub.y <= margin && lb.y - ua.y <= margin &&
-	       la.z - ub.z <= margin && lb.z - ua.z <= margin;
+	return la.x - ub.x <= margin.x && lb.x - ua.x <= margin.x && la.y - ub.y <= margin.y &&
+	       lb.y - ua.y <= margin.y && la.z - ub.z <= margin.z && lb.z - ua.z <= margin.z;
 }
 
 void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
-                              vec3 box_lower, vec3 box_upper, float margin, plait_element_visitor *visit,
+                              vec3 box_lower, vec3 box_upper, vec3 margin, plait_element_visitor *visit,
                               void *context)
 {
 	if (tree->node_count == 0) {

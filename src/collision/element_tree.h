@@ -66,18 +66,19 @@ void plait_element_tree_pairs_skipping(const plait_element_tree *tree, const vec
 
 /* As above between two trees: visit(a, b) with a an element of tree_a, b one of tree_b (each
  * in its own tree's numbering, boxes from its own arrays), for boxes within `margin` of each
- * other, passing over the node pairs skip says (NULL: none). */
+ * other along each axis (its own margin each: how far one tree's boxes may move against the
+ * other's along x, y and z), passing over the node pairs skip says (NULL: none). */
 void plait_element_tree_pairs_between(const plait_element_tree *tree_a, const vec3 *lower_a,
                                       const vec3 *upper_a, const plait_element_tree *tree_b,
-                                      const vec3 *lower_b, const vec3 *upper_b, float margin,
+                                      const vec3 *lower_b, const vec3 *upper_b, vec3 margin,
                                       const plait_node_skip *skip, plait_element_pair_visitor *visit,
                                       void *context);
 
-/* Calls visit(e, context) for every element e whose box comes within `margin` of the box
- * [box_lower, box_upper], in the tree's order. Uses the boxes given to the last refit. */
+/* Calls visit(e, context) for every element e whose box comes within `margin` (along each
+ * axis) of the box [box_lower, box_upper], in the tree's order. Uses the boxes given to the last refit. */
 typedef void plait_element_visitor(int element, void *context);
 void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower, const vec3 *upper,
-                              vec3 box_lower, vec3 box_upper, float margin, plait_element_visitor *visit,
+                              vec3 box_lower, vec3 box_upper, vec3 margin, plait_element_visitor *visit,
                               void *context);
 
 /* The same traversals cut into pieces for workers: writes the node pairs (a, b) reached after
@@ -87,11 +88,11 @@ void plait_element_tree_query(const plait_element_tree *tree, const vec3 *lower,
  * its order. self and margin as for the two queries above (self: tree_b is tree_a, margin 0);
  * skip as for the two queries (NULL: none); uses the node boxes of the last refit. */
 int plait_element_tree_split(const plait_element_tree *tree_a, const plait_element_tree *tree_b, bool self,
-                             float margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
+                             vec3 margin, const plait_node_skip *skip, int depth, int (*pieces)[2],
                              int capacity);
 void plait_element_tree_piece_pairs(const plait_element_tree *tree_a, const vec3 *lower_a,
                                     const vec3 *upper_a, const plait_element_tree *tree_b,
-                                    const vec3 *lower_b, const vec3 *upper_b, bool self, float margin,
+                                    const vec3 *lower_b, const vec3 *upper_b, bool self, vec3 margin,
                                     const plait_node_skip *skip, const int piece[2],
                                     plait_element_pair_visitor *visit, void *context);
 

@@ -303,7 +303,7 @@ bool plait_mesh_contacts_build_elements(plait_sim *sim, plait_mesh_contacts *mc)
 		ok = ok && build_rest_pairs(sim, mc);
 		int objects = mc->object_count;
 		mc->shift = plait_alloc_zero(a, (size_t)objects, sizeof(vec3));
-		mc->allowance = plait_alloc_zero(a, (size_t)(objects * objects), sizeof(float));
+		mc->allowance = plait_alloc_zero(a, (size_t)(objects * objects), sizeof(vec3));
 		mc->object_counts = plait_alloc_zero(a, (size_t)objects, sizeof(int));
 		ok = ok && mc->shift != NULL && mc->allowance != NULL && mc->object_counts != NULL;
 	}

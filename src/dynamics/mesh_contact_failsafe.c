@@ -537,8 +537,9 @@ static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass
 			const vec3 *lower = mc->lower + o->first, *upper = mc->upper + o->first;
 			object_pass self = {pass, o->first, o->first};
 			int node[2] = {n, n};
-			plait_element_tree_piece_pairs(&o->tree, lower, upper, &o->tree, lower, upper, true, 0.0f, NULL,
-			                               node, plait_mesh_contacts_visit_object_elements, &self);
+			plait_element_tree_piece_pairs(&o->tree, lower, upper, &o->tree, lower, upper, true,
+			                               v3(0.0f, 0.0f, 0.0f), NULL, node,
+			                               plait_mesh_contacts_visit_object_elements, &self);
 		}
 	}
 }

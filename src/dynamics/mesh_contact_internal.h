@@ -249,7 +249,7 @@ typedef struct plait_mesh_contacts {
 	int *object_of;                     /* per particle: its collision object, or -1 */
 	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
 	int *object_counts;                 /* per collision object: scratch of object_shifts */
-	float *allowance;                   /* per pair of objects: how far their boxes must reach across */
+	vec3 *allowance; /* per pair of objects: how far their boxes must reach across, along each axis */
 	/* Substeps after its own that the list serves: LIST_SUBSTEPS, or 0 when the last list's
 	 * vertices left their paths before it could serve again (short_lists; see
 	 * plait_mesh_contacts_gather). paths_kept: the last check of a list found every vertex but
@@ -460,7 +460,7 @@ void plait_mesh_contacts_fit_boxes(plait_sim *sim, plait_mesh_contacts *mc, bool
 /* Whether objects a < b meet in mesh contacts. */
 bool plait_mesh_contacts_objects_meet(const plait_sim *sim, const plait_mesh_contacts *mc, int a, int b);
 /* How far objects a and b's boxes reach across in pass's stage (their allowance at a listing). */
-float plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b);
+vec3 plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b);
 /* Every pair of elements that may touch, handed to pass, on the calling thread. */
 void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pass);
 /* Lists the pairs that may touch into mc->pairs, with new guards and allowances. */

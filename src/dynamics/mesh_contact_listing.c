@@ -267,9 +267,9 @@ bool plait_mesh_contacts_objects_meet(const plait_sim *sim, const plait_mesh_con
 }
 
 /* How far two objects' boxes reach across at a listing: their allowance. */
-float plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b)
+vec3 plait_mesh_contacts_listing_margin(const plait_mesh_contacts *mc, const pair_pass *pass, int a, int b)
 {
-	return pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : 0.0f;
+	return pass->stage == STAGE_GATHER ? mc->allowance[a * mc->object_count + b] : v3(0.0f, 0.0f, 0.0f);
 }
 
 /* Every pair of elements that may touch: each self-colliding object with itself, then each
@@ -385,11 +385,17 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 		mc->guard[i] = path_guard(sim, mc, i, bend);
 	}
 	/* Boxes reach across by their elements' motions relative to their objects' (fit_boxes) and
-	 * the objects' relative motion (here). */
+	 * the objects' relative motion (here): over substeps [-1, LIST_SUBSTEPS] from now one
+	 * object moves against the other by s times the difference of their mean motions, which
+	 * along each axis is at most LIST_SUBSTEPS times that axis's part of it. (Not its length
+	 * along every axis: a cloth falling past a collider would meet every collider element
+	 * beside its path as well as those on it.) */
 	for (int a = 0; a < mc->object_count; ++a) {
 		for (int b = 0; b < mc->object_count; ++b) {
-			float allow = (float)LIST_SUBSTEPS * v3_length(v3_sub(mc->shift[a], mc->shift[b])) + 1e-4f;
-			mc->allowance[a * mc->object_count + b] = allow;
+			vec3 d = v3_sub(mc->shift[a], mc->shift[b]);
+			float steps = (float)LIST_SUBSTEPS;
+			mc->allowance[a * mc->object_count + b] =
+			    v3(steps * fabsf(d.x) + 1e-4f, steps * fabsf(d.y) + 1e-4f, steps * fabsf(d.z) + 1e-4f);
 		}
 	}
 	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
@@ -572,7 +578,8 @@ void plait_mesh_contacts_query_around_element(const plait_sim *sim, const plait_
 		/* Past the list's window the boxes are in place, not relative to their objects
 		 * (path_box_range): no allowance between objects. */
 		bool relative = mc->substep_serial - mc->gather_serial <= mc->list_serves;
-		float margin = with_allowance && relative && b != a ? mc->allowance[a * mc->object_count + b] : 0.0f;
+		vec3 margin = with_allowance && relative && b != a ? mc->allowance[a * mc->object_count + b]
+		                                                   : v3(0.0f, 0.0f, 0.0f);
 		around_query query = {context, mc, e, ob->first, visit};
 		plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first, mc->lower[e],
 		                         mc->upper[e], margin, visit_around, &query);

@@ -78,7 +78,7 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	plait_element_tree_piece_pairs(
 	    &oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree, mc->lower + ob->first,
 	    mc->upper + ob->first, self,
-	    self ? 0.0f : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
+	    self ? v3(0.0f, 0.0f, 0.0f) : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
 	    self ? (plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL)
 	         : plait_mesh_contacts_smooth_skip(mc, piece->a, piece->b, &floors, &smooth),
 	    piece->node, plait_mesh_contacts_visit_object_elements, &o);
@@ -265,7 +265,7 @@ bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *m
 			plait_node_skip smooth;
 			int n = plait_element_tree_split(
 			    &oa->tree, &ob->tree, a == b,
-			    a == b ? 0.0f : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b),
+			    a == b ? v3(0.0f, 0.0f, 0.0f) : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b),
 			    a == b ? (plait_mesh_contacts_culls_flat(mc, &margin_pass) ? &skip : NULL)
 			           : plait_mesh_contacts_smooth_skip(mc, a, b, &floors, &smooth),
 			    PIECE_DEPTH, nodes, MAX_PIECES - count);
