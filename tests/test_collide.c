@@ -1045,6 +1045,28 @@ static void tally_short(void *context, int type, const int *v)
 	tally_short_pair(tally, tally->particles, type, v);
 }
 
+/* The listed pairs of a fine sheet against every pair there is (tally_short): those in contact
+ * now, and whether they push, and those whose paths this substep met. */
+static short_tally tally_against_every_pair(plait_mesh_contacts *mc, plait_object_id cloth,
+                                            const plait_particles *p)
+{
+	unsigned long long *listed = malloc(sizeof *listed * (size_t)(mc->pair_count > 0 ? mc->pair_count : 1));
+	for (int k = 0; k < mc->pair_count; ++k) {
+		listed[k] = pair_key(mc->pairs[k].type, mc->pairs[k].v);
+	}
+	qsort(listed, (size_t)mc->pair_count, sizeof *listed, compare_keys);
+	int triangles = plait_object_get_triangles(cloth, NULL, 0);
+	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
+	plait_object_get_triangles(cloth, tri, triangles);
+	int first = mc->elements[0].v[0] - tri[0];
+	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0, p};
+	visit_every_pair(tri, triangles, first, p->count, tally_short, &tally);
+	free(tri);
+	free(listed);
+	tally.keys = NULL;
+	return tally;
+}
+
 /* Where vertices leave their paths every substep, lists serve only their own substep and reach
  * only as far as that needs (mesh_contact_listing.c): the pairs in contact now, pushing, and
  * those whose paths since the substep's start may have met. A fine sheet folded in two, whose
@@ -1076,48 +1098,14 @@ Test(collide, a_short_list_holds_the_pairs_in_contact_and_those_whose_paths_met)
 	cr_assert_eq(mc->list_serves, 0);
 	cr_expect_lt(mc->pair_count, long_count, "the short list (%d pairs) is no shorter than a long one (%d)",
 	             mc->pair_count, long_count);
-	unsigned long long *listed = malloc(sizeof *listed * (size_t)(mc->pair_count > 0 ? mc->pair_count : 1));
-	for (int k = 0; k < mc->pair_count; ++k) {
-		listed[k] = pair_key(mc->pairs[k].type, mc->pairs[k].v);
-	}
-	qsort(listed, (size_t)mc->pair_count, sizeof *listed, compare_keys);
-	int triangles = plait_object_get_triangles(cloth, NULL, 0);
-	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
-	plait_object_get_triangles(cloth, tri, triangles);
-	int first = mc->elements[0].v[0] - tri[0];
-	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0, p};
-	visit_every_pair(tri, triangles, first, p->count, tally_short, &tally);
+	short_tally tally = tally_against_every_pair(mc, cloth, p);
 	cr_expect_gt(tally.in_contact, 1000, "only %d pairs in contact", tally.in_contact);
 	cr_expect_gt(tally.paths_meet, 20, "only %d pairs' paths met", tally.paths_meet);
 	cr_expect_eq(tally.contact_missing, 0, "%d of %d pairs in contact not listed as contacts",
 	             tally.contact_missing, tally.in_contact);
 	cr_expect_eq(tally.paths_missing, 0, "%d of %d pairs whose paths met not listed", tally.paths_missing,
 	             tally.paths_meet);
-	free(tri);
-	free(listed);
 	plait_destroy_world(world);
-}
-
-/* The listed pairs of a fine sheet against every pair there is (tally_short): those in contact
- * now, and whether they push, and those whose paths this substep met. */
-static short_tally tally_against_every_pair(plait_mesh_contacts *mc, plait_object_id cloth,
-                                            const plait_particles *p)
-{
-	unsigned long long *listed = malloc(sizeof *listed * (size_t)(mc->pair_count > 0 ? mc->pair_count : 1));
-	for (int k = 0; k < mc->pair_count; ++k) {
-		listed[k] = pair_key(mc->pairs[k].type, mc->pairs[k].v);
-	}
-	qsort(listed, (size_t)mc->pair_count, sizeof *listed, compare_keys);
-	int triangles = plait_object_get_triangles(cloth, NULL, 0);
-	int *tri = malloc(sizeof(int) * 3 * (size_t)triangles);
-	plait_object_get_triangles(cloth, tri, triangles);
-	int first = mc->elements[0].v[0] - tri[0];
-	short_tally tally = {mc, listed, mc->pair_count, 0, 0, 0, 0, p};
-	visit_every_pair(tri, triangles, first, p->count, tally_short, &tally);
-	free(tri);
-	free(listed);
-	tally.keys = NULL;
-	return tally;
 }
 
 /* Past its window (LIST_SUBSTEPS substeps after its gather) a list that serves on keeps
