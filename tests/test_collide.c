@@ -1187,6 +1187,35 @@ Test(collide, a_list_past_its_window_serves_resting_vertices_and_is_mended_aroun
 	plait_destroy_world(world);
 }
 
+/* Two sheets at rest, weightless, with cloth contacts off: a list at rest serves on (resting
+ * lists), but one made under other settings must not. Cloth contacts turned on, the next step
+ * gathers again, and lists the pairs between the sheets. */
+Test(collide, a_list_at_rest_is_gathered_again_when_the_world_def_changes)
+{
+	plait_world_def def = plait_default_world_def();
+	def.gravity = (plait_vec3){0.0f, 0.0f, 0.0f};
+	def.air_density = 0.0f;
+	def.cloth_contacts = false;
+	plait_world_id world = plait_create_world(&def, NULL);
+	(void)sheet(world, 8, 0.5f, (plait_vec3){0, 0, 0}, (plait_vec3){0, 0, 0}, 0.01f, 0);
+	(void)sheet(world, 8, 0.5f, (plait_vec3){0.01f, 0.015f, 0.02f}, (plait_vec3){0, 0, 0}, 0.01f, 0);
+	cr_assert(test_step_frames(world, 10));
+	const plait_sim *sim = &world.world->sim;
+	long resting = plait_mesh_contacts_listings(sim);
+	cr_assert(test_step_frames(world, 2));
+	cr_assert_eq(plait_mesh_contacts_listings(sim), resting, "the list at rest was gathered again");
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	int listed = mc->pair_count;
+	def.cloth_contacts = true;
+	plait_error error;
+	cr_assert_eq(plait_world_set_def(world, &def, &error), PLAIT_OK, "%s", error.message);
+	cr_assert(test_step_frames(world, 1));
+	cr_expect_gt(plait_mesh_contacts_listings(sim), resting,
+	             "the list made without cloth contacts served on");
+	cr_expect_gt(mc->pair_count, listed, "no pairs between the sheets listed");
+	plait_destroy_world(world);
+}
+
 /* A sheet at rest and one moving into it at 1 m/s, weightless: who moves depends on layers. */
 static void push_between_layers(int resting_layer, int moving_layer, float *resting_moved, float *moving_end)
 {

@@ -77,6 +77,14 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	sim->mesh_contacts = NULL;
 }
 
+void plait_mesh_contacts_forget_list(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc != NULL) {
+		mc->list_valid = false;
+	}
+}
+
 void plait_mesh_contacts_begin_substep(plait_sim *sim)
 {
 	plait_mesh_contacts *mc = sim->mesh_contacts;

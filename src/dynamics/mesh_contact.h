@@ -39,6 +39,11 @@ void plait_mesh_contacts_failsafe(plait_sim *sim);
 
 void plait_mesh_contacts_destroy(plait_sim *sim);
 
+/* Drops the list of candidates: the next substep gathers them again. For settings that change
+ * which pairs are listed or how (plait_world_set_def), since a list at rest may otherwise serve
+ * on for up to LIST_LIFE substeps. */
+void plait_mesh_contacts_forget_list(plait_sim *sim);
+
 /* Corners and edges of mesh and box colliders that the last listing met in element pairs with
  * cloth or curves (each once per pair): *kept those it tested, *left_out those smooth at the
  * scale of the other's triangles, left to the collider pass (for tests and benchmarks). */

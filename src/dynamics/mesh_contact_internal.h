@@ -220,8 +220,9 @@ typedef struct plait_mesh_contacts {
 	piece_list *around_lists;
 	float around_pairs_per_element;
 	/* The list holds every pair that can touch or cross as long as every vertex keeps within its
-	 * guard of the straight path it was on at the gather, for LIST_SUBSTEPS substeps after the
-	 * gather's (plait_mesh_contacts_gather, plait_mesh_contacts_list_covers). */
+	 * guard of its path: the straight one it was on at the gather for LIST_SUBSTEPS substeps
+	 * after the gather's, then at that path's end (path_end), for up to LIST_LIFE substeps
+	 * (plait_mesh_contacts_gather, plait_mesh_contacts_list_covers). */
 	vec3 *x_gather;
 	vec3 *motion; /* per particle: its motion over the gather's substep, start to gather */
 	/* per particle: the substep (counted from the gather's, as `since` in list_holds) where its
@@ -250,10 +251,11 @@ typedef struct plait_mesh_contacts {
 	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
 	int *object_counts;                 /* per collision object: scratch of object_shifts */
 	vec3 *allowance; /* per pair of objects: how far their boxes must reach across, along each axis */
-	/* Substeps after its own that the list serves: LIST_SUBSTEPS, or 0 when the last list's
-	 * vertices left their paths before it could serve again (short_lists; see
-	 * plait_mesh_contacts_gather). paths_kept: the last check of a list found every vertex but
-	 * a few on its path. */
+	/* Substeps after its own that the list's paths run: LIST_SUBSTEPS (its window; past it the
+	 * list serves on while its vertices rest at their paths' ends), or 0 when the last list's
+	 * vertices left their paths before it could serve again (short_lists, serving only their
+	 * own substep; see plait_mesh_contacts_gather). paths_kept: the last check of a list found
+	 * every vertex but a few on its path. */
 	int list_serves;
 	bool short_lists, paths_kept;
 	/* Failsafe scratch: union-find over particles, and the particles it touched. */
@@ -280,6 +282,10 @@ typedef struct plait_mesh_contacts {
 
 /* A list serves the substep of its gather and this many after it. */
 #define LIST_SUBSTEPS 1
+/* Substeps after its gather that a list may serve at most, past its window too (resting lists,
+ * list_holds): a bound on how stale what the list was made under may get, and on the rounding
+ * of mended paths written back to the gather's substep. */
+#define LIST_LIFE 64
 
 /* A list whose vertices strayed from their paths, at most one in this many, is mended around
  * them (the failsafe sweeps around them); otherwise it is gathered again (or traversed). */

@@ -120,8 +120,9 @@ static void fit_box_range(void *context, int begin, int end)
 }
 
 /* The box of each particle's path in [begin, end), relative to its object's mean motion, from
- * the gather's substep's start to the end of the substeps the list serves (its path as the
- * gather took it, at a gather where it is now): each element's box holds its vertices'. */
+ * the gather's substep's start to the end of the list's window (its path as the gather took it,
+ * at a gather where it is now): each element's box holds its vertices'. Past the window, the
+ * box of the path's last stretch, in place. */
 static void path_box_range(void *context, int begin, int end)
 {
 	const box_job *job = context;
@@ -131,7 +132,8 @@ static void path_box_range(void *context, int begin, int end)
 	if (since > mc->list_serves) {
 		/* Past the list's window (a resting list, list_holds) every path stops by this substep:
 		 * the box of its last stretch, in place (not relative to its object, which need not
-		 * move on as it did at the gather; the objects' allowance still widens queries). */
+		 * move on as it did at the gather), so queries between objects need no allowance
+		 * (plait_mesh_contacts_query_around_element). */
 		for (int i = begin; i < end; ++i) {
 			vec3 a = path_at(mc, i, (float)(since - 1)), b = path_at(mc, i, (float)since);
 			mc->path_lower[i] = v3_min(a, b);
@@ -430,9 +432,10 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->list_valid = !mc->out_of_memory;
 }
 
-/* Whether the list still holds every pair that can touch or cross: within LIST_SUBSTEPS
- * substeps of the gather's, every vertex within its guard of its path (see
- * plait_mesh_contacts_gather) at the substep's start and now. A substep's
+/* Whether the list still holds every pair that can touch or cross: within LIST_LIFE substeps
+ * of the gather's (LIST_SUBSTEPS for a short list), every vertex within its guard of its path
+ * (see plait_mesh_contacts_gather; past its end, of where it ended: path_at) at the substep's
+ * start and now. A substep's
  * paths run straight between those, so they keep as near the vertices' paths. With `strayed`
  * (one flag per particle), the vertices out of their guards are flagged and counted into
  * *stray_count instead: the list then holds every pair of two vertices that are not. */
@@ -483,7 +486,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 		return false;
 	}
 	long since = mc->substep_serial - mc->gather_serial;
-	if (since < 0 || (mc->list_serves == 0 && since > LIST_SUBSTEPS)) {
+	if (since < 0 || since > LIST_LIFE || (mc->list_serves == 0 && since > LIST_SUBSTEPS)) {
 		return false;
 	}
 	const plait_particles *p = &sim->particles;
@@ -646,8 +649,6 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		object_pass objects = {&pass, 0, 0};
 		plait_mesh_contacts_query_around(sim, mc, true, plait_mesh_contacts_visit_object_elements, &objects);
 	}
-	mc->features_kept = pass.features_kept; /* over the element pairs the mending met */
-	mc->features_left_out = pass.features_left_out;
 	mc->list_valid = !mc->out_of_memory;
 }
 

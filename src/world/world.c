@@ -9,6 +9,7 @@
 #include "dynamics/contact.h"
 #include "dynamics/bend_kernel.h"
 #include "dynamics/distance_kernel.h"
+#include "dynamics/mesh_contact.h"
 #include "dynamics/sim_store.h"
 #include "dynamics/solver.h"
 
@@ -220,6 +221,9 @@ plait_result plait_world_set_def(plait_world_id id, const plait_world_def *def, 
 	kept.simd = world->def.simd;
 	world->def = kept;
 	apply_settings(world);
+	/* Settings decide which objects meet (cloth_contacts) and the substep the listed paths are
+	 * measured in: a list made under the old ones is not kept. */
+	plait_mesh_contacts_forget_list(&world->sim);
 	return PLAIT_OK;
 }
 
