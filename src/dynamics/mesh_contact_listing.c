@@ -444,8 +444,9 @@ typedef struct holds_job {
 	const plait_mesh_contacts *mc;
 	uint8_t *strayed;
 	long since;
-	_Atomic int strays; /* newly flagged */
-	_Atomic int out;    /* any out of its guard (without `strayed`) */
+	_Atomic int strays;  /* newly flagged */
+	_Atomic int movable; /* particles in mesh contacts that are not held still (inverse mass > 0) */
+	_Atomic int out;     /* any out of its guard (without `strayed`) */
 } holds_job;
 
 #define HOLDS_GRAIN 4096
@@ -455,11 +456,12 @@ static void holds_range(void *context, int begin, int end)
 	holds_job *job = context;
 	const plait_particles *p = &job->sim->particles;
 	const plait_mesh_contacts *mc = job->mc;
-	int strays = 0;
+	int strays = 0, movable = 0;
 	for (int i = begin; i < end; ++i) {
 		if (mc->object_of[i] < 0) {
 			continue;
 		}
+		movable += p->point[i].w > 0.0f;
 		bool out = false;
 		for (int when = 0; when < 2 && !out; ++when) {
 			/* Substeps from the gather's end: its start is -1, now is the current substep's end. */
@@ -477,6 +479,7 @@ static void holds_range(void *context, int begin, int end)
 		}
 	}
 	atomic_fetch_add_explicit(&job->strays, strays, memory_order_relaxed);
+	atomic_fetch_add_explicit(&job->movable, movable, memory_order_relaxed);
 }
 
 static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
@@ -502,6 +505,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	/* Each vertex alone, on the workers; the count is a sum, the same in any order. */
 	holds_job job = {.sim = sim, .mc = mc, .strayed = strayed, .since = since};
 	atomic_init(&job.strays, 0);
+	atomic_init(&job.movable, 0);
 	atomic_init(&job.out, 0);
 	plait_parallel_for(&sim->parallel, holds_range, &job, 0, p->count, HOLDS_GRAIN);
 	if (atomic_load_explicit(&job.out, memory_order_relaxed)) {
@@ -515,7 +519,14 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	 * reach past its own substep. */
 	mc->paths_kept = strays == 0 || plait_mesh_contacts_few_strays(strays, p->count);
 	/* A list that serves on keeps serving past its window while its vertices rest at their
-	 * paths' ends (path_at), and is mended around those that leave them. */
+	 * paths' ends (path_at), and is mended around those that leave them: a few of the vertices
+	 * that can move. (Counted among all, a small cloth moving beside a large mesh collider's
+	 * still vertices would be mended around whole at every substep, which costs more than
+	 * gathering it again.) */
+	if (since > mc->list_serves && strays > 0 &&
+	    !plait_mesh_contacts_few_strays(strays, atomic_load_explicit(&job.movable, memory_order_relaxed))) {
+		return false;
+	}
 	return mc->list_serves > 0 || since <= 0;
 }
 
