@@ -140,6 +140,43 @@ Test(element_tree, pairs_between_trees_within_the_margin)
 	plait_element_tree_destroy(&b, &heap);
 }
 
+/* A query reports every element whose box comes within the margin of the query box, along
+ * each axis its own (the mending's queries between objects moving against each other along
+ * one axis), once, and no other. */
+static void mark_element(int e, void *context)
+{
+	unsigned char *seen = context;
+	seen[e] += 1;
+}
+
+Test(element_tree, a_query_finds_every_box_within_its_margins)
+{
+	enum { COUNT = 211 };
+	vec3 lower[COUNT], upper[COUNT], centre[COUNT];
+	random_boxes(41u, COUNT, 1.0f, 0.05f, lower, upper, centre);
+	plait_element_tree tree = {0};
+	cr_assert(plait_element_tree_build(&tree, &heap, centre, COUNT));
+	plait_element_tree_refit(&tree, lower, upper);
+	const vec3 margins[] = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.25f, 0.0f}, {0.1f, 0.0f, 0.03f}};
+	unsigned state = 3u;
+	for (int q = 0; q < 60; ++q) {
+		vec3 c = v3(next_unit(&state), next_unit(&state), next_unit(&state));
+		float h = 0.1f * next_unit(&state);
+		vec3 box_lower = v3_sub(c, v3(h, h, h)), box_upper = v3_add(c, v3(h, h, h));
+		for (int m = 0; m < 3; ++m) {
+			unsigned char seen[COUNT] = {0};
+			plait_element_tree_query(&tree, lower, upper, box_lower, box_upper, margins[m], mark_element,
+			                         seen);
+			for (int e = 0; e < COUNT; ++e) {
+				bool should = meet(lower[e], upper[e], box_lower, box_upper, margins[m]);
+				cr_assert_eq(seen[e], should ? 1 : 0, "query %d, margins %d: element %d reported %d times", q,
+				             m, e, seen[e]);
+			}
+		}
+	}
+	plait_element_tree_destroy(&tree, &heap);
+}
+
 /* The visits in order. */
 typedef struct visit_log {
 	int (*pairs)[2];
