@@ -30,6 +30,19 @@ typedef struct box_job {
 
 #define FIT_BOX_GRAIN 2048
 
+/* Substeps since the list's gather: 0 at the gather's own. */
+static long substeps_since_gather(const plait_mesh_contacts *mc)
+{
+	return mc->substep_serial - mc->gather_serial;
+}
+
+/* Whether this substep lies past the list's window: every path of the gather has stopped
+ * (path_end), and the list serves on only while its vertices rest (resting lists, list_holds). */
+static bool past_window(const plait_mesh_contacts *mc)
+{
+	return substeps_since_gather(mc) > mc->list_serves;
+}
+
 /* Particle i's motion a substep along its path over the substep `since` (counted from the
  * gather's): mc->motion while its path runs, none once it stopped (mc->path_end). */
 static vec3 path_motion(const plait_mesh_contacts *mc, int i, float since)
@@ -50,7 +63,7 @@ static void fit_box_range(void *context, int begin, int end)
 	plait_mesh_contacts *mc = job->mc;
 	bool paths = job->paths;
 	const plait_particles *p = &sim->particles;
-	float since = (float)(mc->substep_serial - mc->gather_serial);
+	float since = (float)substeps_since_gather(mc);
 	for (int e = begin; e < end; ++e) {
 		const element *el = &mc->elements[e];
 		vec3 lower = p->point[el->v[0]].x, upper = lower;
@@ -128,8 +141,8 @@ static void path_box_range(void *context, int begin, int end)
 	const box_job *job = context;
 	plait_mesh_contacts *mc = job->mc;
 	float serves = (float)mc->list_serves;
-	long since = mc->substep_serial - mc->gather_serial;
-	if (since > mc->list_serves) {
+	if (past_window(mc)) {
+		long since = substeps_since_gather(mc);
 		/* Past the list's window (a resting list, list_holds) every path stops by this substep:
 		 * the box of its last stretch, in place (not relative to its object, which need not
 		 * move on as it did at the gather), so queries between objects need no allowance
@@ -488,7 +501,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	if (!mc->list_valid) {
 		return false;
 	}
-	long since = mc->substep_serial - mc->gather_serial;
+	long since = substeps_since_gather(mc);
 	if (since < 0 || since > LIST_LIFE || (mc->list_serves == 0 && since > LIST_SUBSTEPS)) {
 		return false;
 	}
@@ -523,7 +536,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	 * that can move. (Counted among all, a small cloth moving beside a large mesh collider's
 	 * still vertices would be mended around whole at every substep, which costs more than
 	 * gathering it again.) */
-	if (since > mc->list_serves && strays > 0 &&
+	if (past_window(mc) && strays > 0 &&
 	    !plait_mesh_contacts_few_strays(strays, atomic_load_explicit(&job.movable, memory_order_relaxed))) {
 		return false;
 	}
@@ -591,9 +604,8 @@ void plait_mesh_contacts_query_around_element(const plait_sim *sim, const plait_
 		const collision_object *ob = &mc->objects[b];
 		/* Past the list's window the boxes are in place, not relative to their objects
 		 * (path_box_range): no allowance between objects. */
-		bool relative = mc->substep_serial - mc->gather_serial <= mc->list_serves;
-		vec3 margin = with_allowance && relative && b != a ? mc->allowance[a * mc->object_count + b]
-		                                                   : v3(0.0f, 0.0f, 0.0f);
+		vec3 margin = with_allowance && !past_window(mc) && b != a ? mc->allowance[a * mc->object_count + b]
+		                                                           : v3(0.0f, 0.0f, 0.0f);
 		around_query query = {context, mc, e, ob->first, visit};
 		plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first, mc->lower[e],
 		                         mc->upper[e], margin, visit_around, &query);
@@ -620,14 +632,15 @@ void plait_mesh_contacts_query_around(const plait_sim *sim, const plait_mesh_con
 void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_particles *p = &sim->particles;
-	float since = (float)(mc->substep_serial - mc->gather_serial), bend = path_bend(sim);
+	float since = (float)substeps_since_gather(mc), bend = path_bend(sim);
+	bool stop = past_window(mc);
 	for (int i = 0; i < p->count; ++i) {
 		if (mc->around[i]) {
 			mc->motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
 			mc->x_gather[i] = v3_mul_add(p->point[i].x, -since, mc->motion[i]);
 			/* Past the list's window the others' paths have stopped, and so does this one,
 			 * where it is now: its listing still covers the motion of this substep. */
-			mc->path_end[i] = since > (float)mc->list_serves ? since : (float)LIST_SUBSTEPS;
+			mc->path_end[i] = stop ? since : (float)LIST_SUBSTEPS;
 			mc->guard[i] = path_guard(sim, mc, i, bend);
 		}
 	}
