@@ -168,6 +168,22 @@ Test(collide, a_tube_over_a_bending_arm_never_crosses_itself_or_the_arm)
 	}
 }
 
+/* The tube over the bending arm does not keep to its paths (its lists serve only their own
+ * substep): when such a list no longer covers at the substep's end, the failsafe sweeps by the
+ * traversal of the substep's swept boxes, and does not gather a list that would serve that sweep
+ * alone (the next substep gathers again anyway). So the gathers are at most one a substep,
+ * where the failsafe's made about one substep in four more at full size. */
+Test(collide, a_cloth_off_its_paths_is_gathered_at_most_once_a_substep)
+{
+	collide_scene scene;
+	scene_totals t = run_scene(SCENE_ARM, 16, 0, &scene);
+	expect_clean(&t, "arm at 16");
+	long substeps = (long)scene.frames * plait_world_get_substep_count(scene.world);
+	long gathers = plait_mesh_contacts_listings(&scene.world.world->sim);
+	cr_expect_leq(gathers, substeps, "%ld gathers in %ld substeps", gathers, substeps);
+	collide_scene_destroy(&scene);
+}
+
 Test(collide, hang_over_a_sphere_mesh_with_self_collision)
 {
 	scene_totals t = run_scene(SCENE_HANG_SELF, 24, 200, NULL);
