@@ -25,6 +25,10 @@
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *                      [--per-frame] (a line per frame: its ms, collision ms and counters, and
  *                      the kinetic energy and largest strain at its end, measured untimed)
+ *                      [--variants K] (each scene from K nearby starts, collide_scene_options
+ *                      .variant 0..K-1: a line each, then their median, least and most ms; a
+ *                      change judged on one start of a chaotic scene (folds, a pile) is judged
+ *                      on where its cloth happened to fall)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
 #include <stdint.h>
@@ -160,7 +164,7 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 int main(int argc, char **argv)
 {
 	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false, per_frame = false;
-	int n = 0, frames = 0, runs = 1, threads = 1;
+	int n = 0, frames = 0, runs = 1, threads = 1, variants = 1;
 	collide_scene_options options = collide_scene_default_options();
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
@@ -191,17 +195,20 @@ int main(int argc, char **argv)
 			verbose = true;
 		} else if (strcmp(argv[a], "--per-frame") == 0) {
 			per_frame = true;
+		} else if (strcmp(argv[a], "--variants") == 0 && a + 1 < argc) {
+			variants = atoi(argv[++a]);
 		} else {
 			int k = 0;
 			while (k < SCENE_COUNT && strcmp(argv[a], collide_scene_names[k]) != 0) {
 				++k;
 			}
-			if (k == SCENE_COUNT || runs < 1) {
-				fprintf(stderr,
-				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
-				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--stiff] [--substeps S] [--sphere-slices S] [--verbose] [--per-frame]\n"
-				        "  SCENE: drape thin-box pile twist arm hang-self\n");
+			if (k == SCENE_COUNT || runs < 1 || variants < 1) {
+				fprintf(
+				    stderr,
+				    "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
+				    "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
+				    "[--stiff] [--substeps S] [--sphere-slices S] [--verbose] [--per-frame] [--variants K]\n"
+				    "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
 			chosen[k] = any = true;
@@ -218,23 +225,35 @@ int main(int argc, char **argv)
 			continue;
 		}
 		double *ms = malloc(sizeof(double) * (size_t)runs);
-		run_result last = {0};
-		for (int r = 0; r < runs; ++r) {
-			last = run((collide_scene_kind)k, n, frames, threads, check, verbose, per_frame, &options);
-			ms[r] = last.ms;
+		double *variant_ms = malloc(sizeof(double) * (size_t)variants);
+		for (int v = 0; v < variants; ++v) {
+			options.variant = v;
+			run_result last = {0};
+			for (int r = 0; r < runs; ++r) {
+				last = run((collide_scene_kind)k, n, frames, threads, check, verbose, per_frame, &options);
+				ms[r] = last.ms;
+			}
+			qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
+			variant_ms[v] = ms[runs / 2];
+			printf("scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d "
+			       "crossing_frames=%d worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d "
+			       "failsafe=%d collider_features=%.0f/%.0f flat=%ld/%ld first_ms=%.1f state=%016llx",
+			       collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
+			       last.worst_crossings, last.crossing_frames, last.worst_inside, last.worst_in_round,
+			       last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
+			       (last.features_kept + last.features_left_out) / last.frames, last.unflattened, last.culled,
+			       last.first_ms, (unsigned long long)last.state);
+			printf(variants > 1 ? " variant=%d%s\n" : "%.0d%s\n", v, last.failed ? " FAILED" : "");
+			fflush(stdout);
+			failures += last.failed;
 		}
-		qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
-		printf(
-		    "scene=%s n=%d threads=%d frames=%d ms=%.3f collision=%.2f worst_crossings=%d crossing_frames=%d "
-		    "worst_inside=%d worst_in_round=%d order_violations=%d ccd_hits=%d failsafe=%d "
-		    "collider_features=%.0f/%.0f flat=%ld/%ld first_ms=%.1f state=%016llx%s\n",
-		    collide_scene_names[k], n, threads, last.frames, ms[runs / 2], last.collision_ms / last.ms,
-		    last.worst_crossings, last.crossing_frames, last.worst_inside, last.worst_in_round,
-		    last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
-		    (last.features_kept + last.features_left_out) / last.frames, last.unflattened, last.culled,
-		    last.first_ms, (unsigned long long)last.state, last.failed ? " FAILED" : "");
-		fflush(stdout);
-		failures += last.failed;
+		if (variants > 1) {
+			qsort(variant_ms, (size_t)variants, sizeof(double), compare_doubles);
+			printf("scene=%s variants=%d median_ms=%.3f least_ms=%.3f most_ms=%.3f\n", collide_scene_names[k],
+			       variants, variant_ms[variants / 2], variant_ms[0], variant_ms[variants - 1]);
+			fflush(stdout);
+		}
+		free(variant_ms);
 		free(ms);
 	}
 	return failures > 0;

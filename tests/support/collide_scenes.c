@@ -1,6 +1,7 @@
 #include "collide_scenes.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -137,7 +138,23 @@ static mesh sphere_mesh(int slices, int stacks, float r, plait_vec3 centre)
 static bool add_cloth(collide_scene *scene, const mesh *m, plait_cloth_def *def, plait_error *error)
 {
 	def->mesh = mesh_def(m);
+	plait_vec3 *shifted = NULL;
+	if (scene->options.variant != 0) {
+		/* The world copies the mesh: a shifted copy of its positions serves the creation. */
+		shifted = malloc(sizeof *shifted * (size_t)m->vertex_count);
+		if (shifted == NULL) {
+			error->code = PLAIT_ERROR_OUT_OF_MEMORY;
+			snprintf(error->message, sizeof error->message, "collide_scene: out of memory");
+			return false;
+		}
+		float k = 1e-3f * (float)scene->options.variant;
+		for (int i = 0; i < m->vertex_count; ++i) {
+			shifted[i] = (plait_vec3){m->x[i].x + 0.7f * k, m->x[i].y, m->x[i].z + 0.3f * k};
+		}
+		def->mesh.positions = shifted;
+	}
 	plait_object_id id = plait_create_cloth(scene->world, def, error);
+	free(shifted);
 	if (plait_object_id_is_null(id)) {
 		return false;
 	}
@@ -335,7 +352,7 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 collide_scene_options collide_scene_default_options(void)
 {
-	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false, 0, 0};
+	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false, 0, 0, 0};
 }
 
 bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,

@@ -35,6 +35,10 @@ typedef struct collide_scene_options {
 	/* hang-self with stiff: substeps a frame, one sweep of each constraint kind in each (0: 6).
 	 * A finer cloth needs more to hold together as well as a coarser one (bench_hang). */
 	int stiff_substeps;
+	/* 0: the scene as defined. k > 0: every cloth starts shifted by k times (0.7, 0, 0.3) mm in
+	 * scene units, one of a family of nearby starts: a chaotic scene (folds, a pile) takes each
+	 * its own way, so a change to the solver can be judged over several outcomes, not one. */
+	int variant;
 } collide_scene_options;
 
 typedef struct collide_scene {
