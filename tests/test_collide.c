@@ -168,6 +168,36 @@ Test(collide, a_tube_over_a_bending_arm_never_crosses_itself_or_the_arm)
 	}
 }
 
+/* A scene's variant k starts every cloth shifted by k x (0.7, 0, 0.3) mm (bench_collide
+ * --variants): nearby starts, and only the start moved. */
+Test(collide, a_scene_variant_starts_its_cloths_a_little_aside)
+{
+	collide_scene_options options = collide_scene_default_options();
+	collide_scene scenes[2];
+	plait_error error;
+	for (int k = 0; k < 2; ++k) {
+		options.variant = 2 * k;
+		cr_assert(collide_scene_create_with(&scenes[k], SCENE_DRAPE, 8, NULL, &options, &error), "%s",
+		          error.message);
+	}
+	cr_assert_eq(scenes[0].cloth_count, 2);
+	cr_assert_eq(scenes[1].cloth_count, 2);
+	for (int c = 0; c < 2; ++c) {
+		plait_vec3 x[2][64];
+		for (int k = 0; k < 2; ++k) {
+			cr_assert_eq(plait_object_get_vertex_count(scenes[k].cloths[c]), 64);
+			plait_object_get_positions(scenes[k].cloths[c], 0, 64, x[k], NULL);
+		}
+		for (int i = 0; i < 64; ++i) {
+			cr_expect_float_eq(x[1][i].x - x[0][i].x, 0.0014f, 1e-6f, "cloth %d vertex %d", c, i);
+			cr_expect_eq(x[1][i].y, x[0][i].y, "cloth %d vertex %d", c, i);
+			cr_expect_float_eq(x[1][i].z - x[0][i].z, 0.0006f, 1e-6f, "cloth %d vertex %d", c, i);
+		}
+	}
+	collide_scene_destroy(&scenes[0]);
+	collide_scene_destroy(&scenes[1]);
+}
+
 /* The tube over the bending arm does not keep to its paths (its lists serve only their own
  * substep): when such a list no longer covers at the substep's end, the failsafe sweeps by the
  * traversal of the substep's swept boxes, and does not gather a list that would serve that sweep
