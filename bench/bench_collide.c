@@ -214,6 +214,10 @@ int main(int argc, char **argv)
 			chosen[k] = any = true;
 		}
 	}
+	if (runs < 1 || variants < 1) {
+		fprintf(stderr, "bench_collide: --runs and --variants take a positive count\n");
+		return 2;
+	}
 	if (options.stiff_substeps < 0 || (options.stiff_substeps != 0 && !options.stiff)) {
 		fprintf(stderr, "bench_collide: --substeps takes a positive count and sets the stiff hang-self's "
 		                "substeps; give --stiff too\n");
