@@ -202,7 +202,7 @@ int main(int argc, char **argv)
 			while (k < SCENE_COUNT && strcmp(argv[a], collide_scene_names[k]) != 0) {
 				++k;
 			}
-			if (k == SCENE_COUNT || runs < 1 || variants < 1) {
+			if (k == SCENE_COUNT) {
 				fprintf(
 				    stderr,
 				    "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
@@ -247,7 +247,10 @@ int main(int argc, char **argv)
 			       last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
 			       (last.features_kept + last.features_left_out) / last.frames, last.unflattened, last.culled,
 			       last.first_ms, (unsigned long long)last.state);
-			printf(variants > 1 ? " variant=%d%s\n" : "%.0d%s\n", v, last.failed ? " FAILED" : "");
+			if (variants > 1) {
+				printf(" variant=%d", v);
+			}
+			printf("%s\n", last.failed ? " FAILED" : "");
 			fflush(stdout);
 			failures += last.failed;
 		}
