@@ -159,6 +159,104 @@ static void rigidify(plait_particles *p, int (*members)[2], int first, int last)
 	}
 }
 
+static bool analytic_collider(const plait_collider *c)
+{
+	return c->collide && (c->shape.type == PLAIT_SHAPE_SPHERE || c->shape.type == PLAIT_SHAPE_CAPSULE ||
+	                      c->shape.type == PLAIT_SHAPE_BOX);
+}
+
+/* How far vertex position x lies outside collider c's thickened surface where the collider
+ * is at rigid (negative: inside). */
+static float collider_gap(const plait_sim *sim, const plait_collider *c, const plait_rigid *rigid, int i,
+                          vec3 x)
+{
+	vec3 normal;
+	float distance = plait_shape_distance(&c->shape, plait_rigid_apply_inverse(rigid, x), &normal);
+	return distance * rigid->scale - (sim->particles.radius[i] + c->thickness);
+}
+
+/* The moving analytic collider (sphere, capsule, box) that zone members[first, last) lay
+ * nearest at the substep's start, if one was within a member's contact reach of its
+ * surface; NULL if none. */
+static const plait_collider *collider_beside(const plait_sim *sim, int (*members)[2], int first, int last)
+{
+	const plait_particles *p = &sim->particles;
+	const plait_collider *nearest = NULL;
+	float nearest_gap = INFINITY;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (!analytic_collider(c) || memcmp(&c->rigid_start, &c->rigid_end, sizeof c->rigid_start) == 0) {
+			continue;
+		}
+		for (int m = first; m < last; ++m) {
+			int i = members[m][1];
+			float gap = collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i]);
+			if (gap <= p->radius[i] + c->thickness && gap < nearest_gap) {
+				nearest_gap = gap;
+				nearest = c;
+			}
+		}
+	}
+	return nearest;
+}
+
+/* Where collider c carries vertex i's start over the substep, `share` of the way (0: where it
+ * began, 1: all the way). */
+static vec3 carried_start(const plait_particles *p, const plait_collider *c, int i, float share)
+{
+	vec3 carried = plait_rigid_apply(&c->rigid_end, plait_rigid_apply_inverse(&c->rigid_start, p->x_prev[i]));
+	return v3_lerp(p->x_prev[i], carried, share);
+}
+
+/* Whether carrying zone members[first, last) `share` of the way with collider `carrier` takes a
+ * member further into another collider than it was at the substep's start. */
+static bool carry_presses(const plait_sim *sim, const plait_collider *carrier, int (*members)[2], int first,
+                          int last, float share)
+{
+	const plait_particles *p = &sim->particles;
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (c == carrier || !analytic_collider(c)) {
+			continue;
+		}
+		for (int m = first; m < last; ++m) {
+			int i = members[m][1];
+			float gap = collider_gap(sim, c, &c->rigid_end, i, carried_start(p, carrier, i, share));
+			if (gap < 0.0f && gap < collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i])) {
+				return true;
+			}
+		}
+	}
+	return false;
+}
+
+/* Zone members[first, last) still crossing after the zone rounds: back where the substep
+ * began, which was free, but as seen from what they lay against. A zone beside a moving
+ * collider goes where that collider carried its start: one left behind would end inside a
+ * collider that turned over it, and every later substep would push it out through the cloth
+ * above it and put it back again (the arm scene, performance.md "Session 24"). The zone moves
+ * rigidly, so it crosses nothing within itself. It stays where the substep began when the
+ * carry would press it into another collider (squeezed between two), or when it holds pinned
+ * vertices (they keep to their own motion). */
+static void carry_back(plait_sim *sim, int (*members)[2], int first, int last)
+{
+	plait_particles *p = &sim->particles;
+	bool pinned = false;
+	for (int k = first; k < last && !pinned; ++k) {
+		pinned = p->point[members[k][1]].w == 0.0f;
+	}
+	const plait_collider *c = pinned ? NULL : collider_beside(sim, members, first, last);
+	if (c != NULL && carry_presses(sim, c, members, first, last, 1.0f)) {
+		c = NULL;
+	}
+	for (int k = first; k < last; ++k) {
+		int i = members[k][1];
+		if (p->point[i].w > 0.0f) {
+			p->point[i].x = c != NULL ? carried_start(p, c, i, 1.0f) : p->x_prev[i];
+		}
+	}
+}
+
 /* ---- Sweeps ---------------------------------------------------------------------------------- */
 
 /* The failsafe's test of one pair: swept from the start of the substep to now. */
@@ -654,13 +752,7 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 			if (round < ZONE_ROUNDS) {
 				rigidify(p, mc->members, start, end);
 			} else {
-				/* Still crossing: back to where the substep began, which was free. */
-				for (int k = start; k < end; ++k) {
-					int i = mc->members[k][1];
-					if (p->point[i].w > 0.0f) {
-						p->point[i].x = p->x_prev[i];
-					}
-				}
+				carry_back(sim, mc->members, start, end);
 			}
 			/* A lone vertex that a round collider's triangle push added (see below) is no
 			 * impact zone until frozen. */
