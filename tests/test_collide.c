@@ -178,17 +178,22 @@ Test(collide, a_tube_over_a_bending_arm_never_crosses_itself_or_the_arm)
 /* The forearm turning over cloth the failsafe put back where its substep began would leave
  * it inside the forearm, and every later substep would push it out through the cloth above and
  * put it back again: zones beside a moving collider are put back where the collider carried
- * their start (mesh_contact_failsafe.c, carry_back). From these nearby starts (variants 1 and 5)
- * the sleeve ended with 4 and 28 triangles in the arm, and 5 vertices inside it, before. */
+ * their start, and slide out of the upper arm as one where that squeezes them into it
+ * (mesh_contact_failsafe.c, carry_back). From these nearby starts the sleeve ended inside the
+ * arm before: at n = 14, variant 1 with 4 triangles in it, 5 with 5 vertices and 28 triangles,
+ * 21 with 5 vertices and 22 triangles (still 5 and 21 when carried but not slid); at n = 16,
+ * variant 29 with 1 vertex (3 when carried but not slid). */
 Test(collide, cloth_put_back_by_the_failsafe_moves_with_the_collider_it_lay_on)
 {
-	int variants[2] = {1, 5};
-	for (int k = 0; k < 2; ++k) {
+	struct {
+		int n, variant;
+	} starts[4] = {{14, 1}, {14, 5}, {14, 21}, {16, 29}};
+	for (int k = 0; k < 4; ++k) {
 		collide_scene_options options = collide_scene_default_options();
-		options.variant = variants[k];
-		scene_totals t = run_scene_with(SCENE_ARM, 14, 0, &options, NULL);
-		char name[32];
-		snprintf(name, sizeof name, "arm at 14, variant %d", variants[k]);
+		options.variant = starts[k].variant;
+		scene_totals t = run_scene_with(SCENE_ARM, starts[k].n, 0, &options, NULL);
+		char name[40];
+		snprintf(name, sizeof name, "arm at %d, variant %d", starts[k].n, starts[k].variant);
 		expect_clean(&t, name);
 		cr_expect_gt(t.failsafe, 0, "%s: the failsafe never acted, so nothing was tested", name);
 	}

@@ -230,14 +230,61 @@ static bool carry_presses(const plait_sim *sim, const plait_collider *carrier, i
 	return false;
 }
 
+#define SLIDE_PASSES 8
+
+/* Translates zone members[first, last) (already placed) out of every analytic collider it was
+ * pressed into beyond where it began: the deepest member's push each, pass after pass. */
+static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
+{
+	plait_particles *p = &sim->particles;
+	for (int pass = 0; pass < SLIDE_PASSES; ++pass) {
+		bool moved = false;
+		for (int k = 0; k < sim->collider_count; ++k) {
+			const plait_collider *c = &sim->colliders[k];
+			if (!analytic_collider(c)) {
+				continue;
+			}
+			float deepest = 0.0f;
+			vec3 push = v3(0.0f, 0.0f, 0.0f);
+			for (int m = first; m < last; ++m) {
+				int i = members[m][1];
+				if (p->point[i].w == 0.0f) {
+					continue;
+				}
+				vec3 normal;
+				float distance = plait_shape_distance(
+				    &c->shape, plait_rigid_apply_inverse(&c->rigid_end, p->point[i].x), &normal);
+				float gap = distance * c->rigid_end.scale - (p->radius[i] + c->thickness);
+				float allowed = plait_minf(collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i]), 0.0f);
+				if (gap < allowed && allowed - gap > deepest) {
+					deepest = allowed - gap;
+					push = plait_rigid_rotate(&c->rigid_end, normal);
+				}
+			}
+			if (deepest > 0.0f) {
+				moved = true;
+				for (int m = first; m < last; ++m) {
+					int i = members[m][1];
+					if (p->point[i].w > 0.0f) {
+						p->point[i].x = v3_mul_add(p->point[i].x, deepest, push);
+					}
+				}
+			}
+		}
+		if (!moved) {
+			return;
+		}
+	}
+}
+
 /* Zone members[first, last) still crossing after the zone rounds: back where the substep
  * began, which was free, but as seen from what they lay against. A zone beside a moving
  * collider goes where that collider carried its start: one left behind would end inside a
  * collider that turned over it, and every later substep would push it out through the cloth
  * above it and put it back again (the arm scene, performance.md "Session 24"). The zone moves
- * rigidly, so it crosses nothing within itself. It stays where the substep began when the
- * carry would press it into another collider (squeezed between two), or when it holds pinned
- * vertices (they keep to their own motion). */
+ * rigidly, so it crosses nothing within itself. Squeezed between that collider and another, it
+ * slides out of both as one. A zone with pinned vertices stays where the substep began (they
+ * keep to their own motion). */
 static void carry_back(plait_sim *sim, int (*members)[2], int first, int last)
 {
 	plait_particles *p = &sim->particles;
@@ -246,14 +293,15 @@ static void carry_back(plait_sim *sim, int (*members)[2], int first, int last)
 		pinned = p->point[members[k][1]].w == 0.0f;
 	}
 	const plait_collider *c = pinned ? NULL : collider_beside(sim, members, first, last);
-	if (c != NULL && carry_presses(sim, c, members, first, last, 1.0f)) {
-		c = NULL;
-	}
+	bool presses = c != NULL && carry_presses(sim, c, members, first, last, 1.0f);
 	for (int k = first; k < last; ++k) {
 		int i = members[k][1];
 		if (p->point[i].w > 0.0f) {
 			p->point[i].x = c != NULL ? carried_start(p, c, i, 1.0f) : p->x_prev[i];
 		}
+	}
+	if (presses) {
+		slide_out(sim, members, first, last);
 	}
 }
 
