@@ -353,19 +353,18 @@ static void object_shifts(const plait_sim *sim, plait_mesh_contacts *mc, const v
  * straight path it is on: its motion u over this substep so far (start to now), continued at
  * the same pace for LIST_SUBSTEPS more substeps. A vertex may stray from that path by its guard:
  * a quarter of its motion relative to its object's mean motion, gravity's bend of the path over
- * the substeps the list serves, a tenth of its radius (contact pushes) and a tenth of a
- * millimetre in metres. Over substeps [gather - 1, gather + LIST_SUBSTEPS] from now, vertices
- * k and l then move relative to each other by at most LIST_SUBSTEPS |u_k - u_l| plus their
- * guards, and so do any two points of two primitives (points of a primitive move by means of
- * its vertices' motions); the element pair walk lists the pairs nearer than their contact
- * distance plus that. Neighbours that move together (a cloth falling or swinging as a whole)
- * then list only what is really close, and keep their list while they move steadily.
- * Where vertices do not keep to their paths (cloth thrown about on a collider, squeezed in
- * folds), a list that serves on is gathered again at the next substep anyway: there the lists
- * are short (mc->short_lists) and serve only their own substep. They list the pairs within
- * their contact distance now (plus their guards) and those whose paths so far may have met,
- * not those that may meet in the next substep: a pair's reach is the larger of its contact
- * distance and its motion, not their sum. */
+ * the substeps the list serves, a share of its radius (contact pushes: a fifth for a list that
+ * serves on, a tenth for a short one) and a tenth of a millimetre in metres. Over substeps [gather - 1,
+ * gather + LIST_SUBSTEPS] from now, vertices k and l then move relative to each other by at most
+ * LIST_SUBSTEPS |u_k - u_l| plus their guards, and so do any two points of two primitives (points of a
+ * primitive move by means of its vertices' motions); the element pair walk lists the pairs nearer than their
+ * contact distance plus that. Neighbours that move together (a cloth falling or swinging as a whole) then
+ * list only what is really close, and keep their list while they move steadily. Where vertices do not keep to
+ * their paths (cloth thrown about on a collider, squeezed in folds), a list that serves on is gathered again
+ * at the next substep anyway: there the lists are short (mc->short_lists) and serve only their own substep.
+ * They list the pairs within their contact distance now (plus their guards) and those whose paths so far may
+ * have met, not those that may meet in the next substep: a pair's reach is the larger of its contact distance
+ * and its motion, not their sum. */
 /* Gravity's bend of a path over the substeps a list serves. */
 static float path_bend(const plait_sim *sim)
 {
@@ -373,12 +372,21 @@ static float path_bend(const plait_sim *sim)
 	return v3_length(sim->settings.gravity) * h * h * 0.5f * steps * (steps + 1.0f);
 }
 
+/* The share of a vertex's radius its guard allows for contact pushes. A list that serves on is
+ * mended, not gathered again, while only a few vertices stray, and a larger allowance keeps
+ * more of them on their paths (drape: 414 gathers in 540 substeps at a tenth, 166 at a fifth;
+ * pile and twist faster too). A short list serves only its substep, and a larger allowance
+ * would only lengthen it (arm). performance.md, sessions 23 and 24. */
+#define PUSH_SHARE_SERVING 0.2f
+#define PUSH_SHARE_SHORT 0.1f
+
 /* Particle i's guard, from its motion (mc->motion) and its object's mean (mc->shift). */
 static float path_guard(const plait_sim *sim, const plait_mesh_contacts *mc, int i, float bend)
 {
 	int o = mc->object_of[i];
 	float relative = o >= 0 ? v3_length(v3_add(mc->motion[i], mc->shift[o])) : v3_length(mc->motion[i]);
-	return 0.25f * relative + bend + 0.1f * sim->particles.radius[i] + 1e-4f;
+	float push_share = mc->list_serves > 0 ? PUSH_SHARE_SERVING : PUSH_SHARE_SHORT;
+	return 0.25f * relative + bend + push_share * sim->particles.radius[i] + 1e-4f;
 }
 
 void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
