@@ -214,6 +214,23 @@ Test(collide, cloth_put_back_by_the_failsafe_moves_with_the_collider_it_lay_on)
 	}
 }
 
+/* The same sleeve over the arm given as two closed capsule meshes (912 triangles each), the
+ * forearm's mesh turned by its keyframed transform: cloth meets a mesh collider's faces, edges
+ * and corners in the mesh contacts, continuously, and zones that cross one take in its
+ * vertices. Clean from 32 nearby starts at n = 14 and 16 (performance.md, session 24). */
+Test(collide, a_tube_over_a_bending_mesh_arm_never_crosses_itself_or_the_arm)
+{
+	collide_scene_options options = collide_scene_default_options();
+	options.mesh_colliders = true;
+	collide_scene scene;
+	scene_totals t = run_scene_with(SCENE_ARM, 14, 0, &options, &scene);
+	expect_clean(&t, "mesh arm at 14");
+	/* The meshes are closed, so the checker looked for vertices inside them. */
+	cr_expect(plait_collider_is_closed(scene.animated));
+	cr_expect_gt(t.ccd_hits, 0, "the sleeve never met the arm, so nothing was tested");
+	collide_scene_destroy(&scene);
+}
+
 /* A scene's variant k starts every cloth shifted by k x (0.7, 0, 0.3) mm (bench_collide
  * --variants): nearby starts, and only the start moved. */
 Test(collide, a_scene_variant_starts_its_cloths_a_little_aside)

@@ -90,6 +90,85 @@ static mesh tube(int around, int along, float r, float x0, float x1)
 	return m;
 }
 
+/* A capsule round the x axis from x0 to x1, of radius r, as a closed mesh: `slices` vertices
+ * round each ring, `cap` rings to each hemisphere's pole, `segments` lengths along the cylinder;
+ * every face wound counter-clockwise seen from outside. */
+static mesh capsule_mesh(int slices, int cap, int segments, float r, float x0, float x1)
+{
+	int rings = 2 * cap + segments - 1;
+	mesh m = mesh_alloc(2 + rings * slices, slices * (rings + 1));
+	float ring_x[64], ring_r[64];
+	int count = 0;
+	for (int k = 1; k <= cap; ++k) {
+		float theta = 0.5f * pi * (float)k / (float)cap;
+		ring_x[count] = x0 - r * cosf(theta);
+		ring_r[count++] = r * sinf(theta);
+	}
+	for (int k = 1; k < segments; ++k) {
+		ring_x[count] = x0 + (x1 - x0) * (float)k / (float)segments;
+		ring_r[count++] = r;
+	}
+	for (int k = cap; k >= 1; --k) {
+		float theta = 0.5f * pi * (float)k / (float)cap;
+		ring_x[count] = x1 + r * cosf(theta);
+		ring_r[count++] = r * sinf(theta);
+	}
+	m.x[0] = (plait_vec3){x0 - r, 0.0f, 0.0f};
+	m.x[1] = (plait_vec3){x1 + r, 0.0f, 0.0f};
+	for (int j = 0; j < rings; ++j) {
+		for (int i = 0; i < slices; ++i) {
+			float a = 2.0f * pi * (float)i / (float)slices;
+			m.x[2 + j * slices + i] = (plait_vec3){ring_x[j], ring_r[j] * cosf(a), ring_r[j] * sinf(a)};
+		}
+	}
+	for (int i = 0; i < slices; ++i) {
+		int next = (i + 1) % slices;
+		m.sizes[m.face_count] = 3;
+		int *f = m.indices + 4 * m.face_count++;
+		f[0] = 0;
+		f[1] = 2 + i;
+		f[2] = 2 + next;
+		for (int j = 0; j + 1 < rings; ++j) {
+			int a = 2 + j * slices;
+			add_quad(&m, a + i, a + slices + i, a + slices + next, a + next);
+		}
+		m.sizes[m.face_count] = 3;
+		f = m.indices + 4 * m.face_count++;
+		int last = 2 + (rings - 1) * slices;
+		f[0] = 1;
+		f[1] = last + next;
+		f[2] = last + i;
+	}
+	/* Each face turned to face away from the axis (the winding above is meant to, this makes
+	 * sure), then the triangles stored in quad slots compacted. */
+	int at = 0;
+	for (int k = 0; k < m.face_count; ++k) {
+		int *f = m.indices + 4 * k, n = m.sizes[k];
+		plait_vec3 a = m.x[f[0]], b = m.x[f[1]], c = m.x[f[2]];
+		plait_vec3 u = {b.x - a.x, b.y - a.y, b.z - a.z}, v = {c.x - a.x, c.y - a.y, c.z - a.z};
+		plait_vec3 normal = {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+		plait_vec3 centre = {0.0f, 0.0f, 0.0f};
+		for (int q = 0; q < n; ++q) {
+			centre.x += m.x[f[q]].x / (float)n;
+			centre.y += m.x[f[q]].y / (float)n;
+			centre.z += m.x[f[q]].z / (float)n;
+		}
+		float axis_x = centre.x < x0 ? x0 : centre.x > x1 ? x1 : centre.x;
+		float outward = normal.x * (centre.x - axis_x) + normal.y * centre.y + normal.z * centre.z;
+		if (outward < 0.0f) {
+			for (int q = 0; q < n / 2; ++q) {
+				int t = f[q];
+				f[q] = f[n - 1 - q];
+				f[n - 1 - q] = t;
+			}
+		}
+		for (int q = 0; q < n; ++q) {
+			m.indices[at++] = f[q];
+		}
+	}
+	return m;
+}
+
 /* A sphere of `slices` x `stacks` (poles as fans of quads with a repeated vertex: triangles). */
 static mesh sphere_mesh(int slices, int stacks, float r, plait_vec3 centre)
 {
@@ -276,10 +355,18 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		fore.name = "forearm";
 		fore.a = (plait_vec3){0.0f, 0.0f, 0.0f};
 		fore.b = (plait_vec3){0.35f, 0.0f, 0.0f};
-		if (plait_object_id_is_null(plait_create_collider(scene->world, &upper, error))) {
-			return false;
+		mesh upper_mesh = {0}, fore_mesh = {0};
+		if (scene->options.mesh_colliders) {
+			upper_mesh = capsule_mesh(24, 4, 12, r, -0.4f, 0.0f);
+			fore_mesh = capsule_mesh(24, 4, 12, r, 0.0f, 0.35f);
+			upper.shape = fore.shape = PLAIT_SHAPE_MESH;
+			upper.mesh = mesh_def(&upper_mesh);
+			fore.mesh = mesh_def(&fore_mesh);
 		}
-		scene->animated = plait_create_collider(scene->world, &fore, error);
+		bool made = !plait_object_id_is_null(plait_create_collider(scene->world, &upper, error));
+		scene->animated = made ? plait_create_collider(scene->world, &fore, error) : (plait_object_id){0};
+		mesh_free(&upper_mesh);
+		mesh_free(&fore_mesh);
 		if (plait_object_id_is_null(scene->animated)) {
 			return false;
 		}
@@ -352,7 +439,8 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 collide_scene_options collide_scene_default_options(void)
 {
-	return (collide_scene_options){plait_default_cloth_def().self_collision_flag, 0.0f, false, 0, 0, 0};
+	return (collide_scene_options){
+	    plait_default_cloth_def().self_collision_flag, 0.0f, false, 0, 0, 0, false};
 }
 
 bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,

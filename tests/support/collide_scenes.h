@@ -39,6 +39,9 @@ typedef struct collide_scene_options {
 	 * scene units, one of a family of nearby starts: a chaotic scene (folds, a pile) takes each
 	 * its own way, so a change to the solver can be judged over several outcomes, not one. */
 	int variant;
+	/* arm: the upper arm and forearm as closed triangle meshes of their capsules (912 triangles
+	 * each), not analytic capsules */
+	bool mesh_colliders;
 } collide_scene_options;
 
 typedef struct collide_scene {
