@@ -16,9 +16,11 @@
  * test from the start of the substep to the end; pairs that cross join impact zones (vertex
  * sets merged by union-find) whose motion over the substep is made rigid, keeping their mean
  * displacement and angular momentum (Provot 1997, Bridson et al. 2002), until no pair crosses.
- * Zones that still cross after a fixed number of rounds are frozen at their start positions,
- * which were free of intersections, so a substep never ends with primitives passed through each
- * other (pinned vertices, which cannot be frozen, aside). */
+ * Zones that still cross after a fixed number of rounds are put back at their start positions,
+ * which were free of intersections, as seen from a moving collider they lay on (carried with it,
+ * and slid out of any other it then presses them into), and swept again; the last round puts
+ * them back at their start positions themselves, so a substep never ends with primitives passed
+ * through each other (pinned vertices, which cannot be put back, aside). */
 #ifndef PLAIT_DYNAMICS_MESH_CONTACT_H
 #define PLAIT_DYNAMICS_MESH_CONTACT_H
 

@@ -1,6 +1,6 @@
 /* The failsafe at the end of a substep (mesh_contact.h): every pair swept from the substep's
  * start, on the workers when there are any, and the pairs that cross joined into impact zones
- * made rigid, or put back where the substep began. */
+ * made rigid, or put back where the substep began (carried with a moving collider they lay on). */
 #include "dynamics/mesh_contact_internal.h"
 
 #include <math.h>
@@ -159,25 +159,32 @@ static void rigidify(plait_particles *p, int (*members)[2], int first, int last)
 	}
 }
 
-static bool analytic_collider(const plait_collider *c)
+/* Colliders a zone can be carried by: the shapes with a rigid motion and a bounded body. */
+static bool carrying_collider(const plait_collider *c)
 {
 	return c->collide && (c->shape.type == PLAIT_SHAPE_SPHERE || c->shape.type == PLAIT_SHAPE_CAPSULE ||
 	                      c->shape.type == PLAIT_SHAPE_BOX);
 }
 
-/* How far vertex position x lies outside collider c's thickened surface where the collider
- * is at rigid (negative: inside). */
-static float collider_gap(const plait_sim *sim, const plait_collider *c, const plait_rigid *rigid, int i,
-                          vec3 x)
+/* Colliders a carried zone must not be pressed into: those, and planes (meshes meet the zone's
+ * vertices in the mesh contacts, not here). */
+static bool pressing_collider(const plait_collider *c)
 {
-	vec3 normal;
-	float distance = plait_shape_distance(&c->shape, plait_rigid_apply_inverse(rigid, x), &normal);
+	return carrying_collider(c) || (c->collide && c->shape.type == PLAIT_SHAPE_PLANE);
+}
+
+/* How far vertex i at x lies outside collider c's thickened surface (c's thickness and i's
+ * radius) where the collider is at rigid; negative inside. */
+static float collider_gap(const plait_sim *sim, const plait_collider *c, const plait_rigid *rigid, int i,
+                          vec3 x, vec3 *normal)
+{
+	float distance = plait_shape_distance(&c->shape, plait_rigid_apply_inverse(rigid, x), normal);
 	return distance * rigid->scale - (sim->particles.radius[i] + c->thickness);
 }
 
-/* The moving analytic collider (sphere, capsule, box) that zone members[first, last) lay
- * nearest at the substep's start, if one was within a member's contact reach of its
- * surface; NULL if none. */
+/* The moving collider that zone members[first, last) lay nearest at the substep's start, if a
+ * member was within its contact reach of the thickened surface (twice the reach from the bare
+ * one); NULL if none. */
 static const plait_collider *collider_beside(const plait_sim *sim, int (*members)[2], int first, int last)
 {
 	const plait_particles *p = &sim->particles;
@@ -185,12 +192,13 @@ static const plait_collider *collider_beside(const plait_sim *sim, int (*members
 	float nearest_gap = INFINITY;
 	for (int k = 0; k < sim->collider_count; ++k) {
 		const plait_collider *c = &sim->colliders[k];
-		if (!analytic_collider(c) || memcmp(&c->rigid_start, &c->rigid_end, sizeof c->rigid_start) == 0) {
+		if (!carrying_collider(c) || memcmp(&c->rigid_start, &c->rigid_end, sizeof c->rigid_start) == 0) {
 			continue;
 		}
 		for (int m = first; m < last; ++m) {
 			int i = members[m][1];
-			float gap = collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i]);
+			vec3 normal;
+			float gap = collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i], &normal);
 			if (gap <= p->radius[i] + c->thickness && gap < nearest_gap) {
 				nearest_gap = gap;
 				nearest = c;
@@ -200,29 +208,39 @@ static const plait_collider *collider_beside(const plait_sim *sim, int (*members
 	return nearest;
 }
 
-/* Where collider c carries vertex i's start over the substep, `share` of the way (0: where it
- * began, 1: all the way). */
-static vec3 carried_start(const plait_particles *p, const plait_collider *c, int i, float share)
+/* Where collider c's motion over the substep carries vertex i's start. */
+static vec3 carried_start(const plait_particles *p, const plait_collider *c, int i)
 {
-	vec3 carried = plait_rigid_apply(&c->rigid_end, plait_rigid_apply_inverse(&c->rigid_start, p->x_prev[i]));
-	return v3_lerp(p->x_prev[i], carried, share);
+	return plait_rigid_apply(&c->rigid_end, plait_rigid_apply_inverse(&c->rigid_start, p->x_prev[i]));
 }
 
-/* Whether carrying zone members[first, last) `share` of the way with collider `carrier` takes a
- * member further into another collider than it was at the substep's start. */
+/* How far collider c presses vertex i at x deeper in than it was at the substep's start (0:
+ * not), and the way out (world space). */
+static float pressed_depth(const plait_sim *sim, const plait_collider *c, int i, vec3 x, vec3 *way_out)
+{
+	vec3 normal, unused;
+	float gap = collider_gap(sim, c, &c->rigid_end, i, x, &normal);
+	float allowed =
+	    plait_minf(collider_gap(sim, c, &c->rigid_start, i, sim->particles.x_prev[i], &unused), 0.0f);
+	*way_out = plait_rigid_rotate(&c->rigid_end, normal);
+	return gap < allowed ? allowed - gap : 0.0f;
+}
+
+/* Whether carrying zone members[first, last) with collider `carrier` presses a member into
+ * another collider. */
 static bool carry_presses(const plait_sim *sim, const plait_collider *carrier, int (*members)[2], int first,
-                          int last, float share)
+                          int last)
 {
 	const plait_particles *p = &sim->particles;
 	for (int k = 0; k < sim->collider_count; ++k) {
 		const plait_collider *c = &sim->colliders[k];
-		if (c == carrier || !analytic_collider(c)) {
+		if (c == carrier || !pressing_collider(c)) {
 			continue;
 		}
 		for (int m = first; m < last; ++m) {
 			int i = members[m][1];
-			float gap = collider_gap(sim, c, &c->rigid_end, i, carried_start(p, carrier, i, share));
-			if (gap < 0.0f && gap < collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i])) {
+			vec3 way_out;
+			if (pressed_depth(sim, c, i, carried_start(p, carrier, i), &way_out) > 0.0f) {
 				return true;
 			}
 		}
@@ -232,8 +250,9 @@ static bool carry_presses(const plait_sim *sim, const plait_collider *carrier, i
 
 #define SLIDE_PASSES 8
 
-/* Translates zone members[first, last) (already placed) out of every analytic collider it was
- * pressed into beyond where it began: the deepest member's push each, pass after pass. */
+/* Translates zone members[first, last), as placed, out of every collider that presses them in
+ * deeper than they began: by the deepest member's push, collider after collider, pass after
+ * pass. */
 static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
 {
 	plait_particles *p = &sim->particles;
@@ -241,24 +260,18 @@ static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
 		bool moved = false;
 		for (int k = 0; k < sim->collider_count; ++k) {
 			const plait_collider *c = &sim->colliders[k];
-			if (!analytic_collider(c)) {
+			if (!pressing_collider(c)) {
 				continue;
 			}
 			float deepest = 0.0f;
 			vec3 push = v3(0.0f, 0.0f, 0.0f);
 			for (int m = first; m < last; ++m) {
 				int i = members[m][1];
-				if (p->point[i].w == 0.0f) {
-					continue;
-				}
-				vec3 normal;
-				float distance = plait_shape_distance(
-				    &c->shape, plait_rigid_apply_inverse(&c->rigid_end, p->point[i].x), &normal);
-				float gap = distance * c->rigid_end.scale - (p->radius[i] + c->thickness);
-				float allowed = plait_minf(collider_gap(sim, c, &c->rigid_start, i, p->x_prev[i]), 0.0f);
-				if (gap < allowed && allowed - gap > deepest) {
-					deepest = allowed - gap;
-					push = plait_rigid_rotate(&c->rigid_end, normal);
+				vec3 way_out;
+				float depth = p->point[i].w > 0.0f ? pressed_depth(sim, c, i, p->point[i].x, &way_out) : 0.0f;
+				if (depth > deepest) {
+					deepest = depth;
+					push = way_out;
 				}
 			}
 			if (deepest > 0.0f) {
@@ -283,26 +296,29 @@ static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
  * collider that turned over it, and every later substep would push it out through the cloth
  * above it and put it back again (the arm scene, performance.md "Session 24"). The zone moves
  * rigidly, so it crosses nothing within itself. Squeezed between that collider and another, it
- * slides out of both as one. A zone with pinned vertices stays where the substep began (they
- * keep to their own motion). */
-static void carry_back(plait_sim *sim, int (*members)[2], int first, int last)
+ * slides out of both as one. Neither place was swept: the round after sweeps again, and the
+ * last round (`carry` false) puts zones back at their start, which was free. A zone with pinned
+ * vertices stays where the substep began (they keep to their own motion). Returns whether the
+ * zone was carried. */
+static bool carry_back(plait_sim *sim, int (*members)[2], int first, int last, bool carry)
 {
 	plait_particles *p = &sim->particles;
 	bool pinned = false;
 	for (int k = first; k < last && !pinned; ++k) {
 		pinned = p->point[members[k][1]].w == 0.0f;
 	}
-	const plait_collider *c = pinned ? NULL : collider_beside(sim, members, first, last);
-	bool presses = c != NULL && carry_presses(sim, c, members, first, last, 1.0f);
+	const plait_collider *c = pinned || !carry ? NULL : collider_beside(sim, members, first, last);
+	bool presses = c != NULL && carry_presses(sim, c, members, first, last);
 	for (int k = first; k < last; ++k) {
 		int i = members[k][1];
 		if (p->point[i].w > 0.0f) {
-			p->point[i].x = c != NULL ? carried_start(p, c, i, 1.0f) : p->x_prev[i];
+			p->point[i].x = c != NULL ? carried_start(p, c, i) : p->x_prev[i];
 		}
 	}
 	if (presses) {
 		slide_out(sim, members, first, last);
 	}
+	return c != NULL;
 }
 
 /* ---- Sweeps ---------------------------------------------------------------------------------- */
@@ -800,7 +816,8 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 			if (round < ZONE_ROUNDS) {
 				rigidify(p, mc->members, start, end);
 			} else {
-				carry_back(sim, mc->members, start, end);
+				bool last_round = round == ZONE_ROUNDS + FREEZE_ROUNDS - 1;
+				mc->carried_zones += carry_back(sim, mc->members, start, end, !last_round);
 			}
 			/* A lone vertex that a round collider's triangle push added (see below) is no
 			 * impact zone until frozen. */

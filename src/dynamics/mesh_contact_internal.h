@@ -247,6 +247,7 @@ typedef struct plait_mesh_contacts {
 	vec3 *path_lower, *path_upper;
 	long substep_serial, gather_serial; /* substeps begun since the stage was made; the gather's */
 	long listings;                      /* gathers since the stage was made */
+	long carried_zones;                 /* zones the failsafe put back carried by a collider */
 	int *object_of;                     /* per particle: its collision object, or -1 */
 	vec3 *shift;                        /* per collision object: mean motion since the gather (scratch) */
 	int *object_counts;                 /* per collision object: scratch of object_shifts */

@@ -376,7 +376,10 @@ static float path_bend(const plait_sim *sim)
  * mended, not gathered again, while only a few vertices stray, and a larger allowance keeps
  * more of them on their paths (drape: 414 gathers in 540 substeps at a tenth, 166 at a fifth;
  * pile and twist faster too). A short list serves only its substep, and a larger allowance
- * would only lengthen it (arm). performance.md, sessions 23 and 24. */
+ * would only lengthen it (arm). Whether the next lists are short is judged against the last
+ * list's guards (plait_mesh_contacts_project: paths_kept), so the choice holds a little: after
+ * short lists the vertices must keep within the smaller allowance for lists to serve on again.
+ * performance.md, sessions 23 and 24. */
 #define PUSH_SHARE_SERVING 0.2f
 #define PUSH_SHARE_SHORT 0.1f
 

@@ -1,5 +1,6 @@
 #include "collide_scenes.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -96,6 +97,7 @@ static mesh tube(int around, int along, float r, float x0, float x1)
 static mesh capsule_mesh(int slices, int cap, int segments, float r, float x0, float x1)
 {
 	int rings = 2 * cap + segments - 1;
+	assert(rings <= 64);
 	mesh m = mesh_alloc(2 + rings * slices, slices * (rings + 1));
 	float ring_x[64], ring_r[64];
 	int count = 0;
