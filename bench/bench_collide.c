@@ -20,7 +20,7 @@
  *                      [--self-flag full|vertex_face|vertex] (of the self-colliding cloths)
  *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
  *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
- *                      [--mesh-colliders] (arm: the capsules as triangle meshes)
+ *                      [--mesh-colliders] (arm, drape, twist: the capsules and spheres as meshes)
  *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
  *                      [--sphere-slices S] (hang-self: the sphere mesh's slices and stacks, 50)
  *                      [--verbose] (frames with crossings or vertices inside colliders)

@@ -261,7 +261,15 @@ static plait_object_id add_sphere(collide_scene *scene, float r, plait_vec3 cent
 	sphere.center = centre;
 	sphere.radius = r;
 	sphere.surface.friction = friction;
-	return plait_create_collider(scene->world, &sphere, error);
+	if (!scene->options.mesh_colliders) {
+		return plait_create_collider(scene->world, &sphere, error);
+	}
+	mesh ball = sphere_mesh(40, 40, r, centre);
+	sphere.shape = PLAIT_SHAPE_MESH;
+	sphere.mesh = mesh_def(&ball);
+	plait_object_id id = plait_create_collider(scene->world, &sphere, error);
+	mesh_free(&ball);
+	return id;
 }
 
 static bool build(collide_scene *scene, int n, plait_error *error)

@@ -40,7 +40,8 @@ typedef struct collide_scene_options {
 	 * its own way, so a change to the solver can be judged over several outcomes, not one. */
 	int variant;
 	/* arm: the upper arm and forearm as closed triangle meshes of their capsules (912 triangles
-	 * each), not analytic capsules */
+	 * each); drape and twist: the sphere as a closed mesh of 40 slices and stacks (3,120
+	 * triangles); not analytic shapes */
 	bool mesh_colliders;
 } collide_scene_options;
 
