@@ -21,6 +21,7 @@
  *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
  *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
  *                      [--mesh-colliders] (arm, drape, twist: the capsules and spheres as meshes)
+ *                      [--box-colliders] (arm: the capsules as square box bars)
  *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
  *                      [--sphere-slices S] (hang-self: the sphere mesh's slices and stacks, 50)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
@@ -187,6 +188,8 @@ int main(int argc, char **argv)
 			options.thickness_per_edge = (float)atof(argv[++a]);
 		} else if (strcmp(argv[a], "--mesh-colliders") == 0) {
 			options.mesh_colliders = true;
+		} else if (strcmp(argv[a], "--box-colliders") == 0) {
+			options.box_colliders = true;
 		} else if (strcmp(argv[a], "--stiff") == 0) {
 			options.stiff = true;
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
@@ -209,7 +212,8 @@ int main(int argc, char **argv)
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
 				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--stiff] [--mesh-colliders] [--substeps S] [--sphere-slices S] [--verbose] "
+				        "[--stiff] [--mesh-colliders] [--box-colliders] [--substeps S] [--sphere-slices S] "
+				        "[--verbose] "
 				        "[--per-frame] [--variants K]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;

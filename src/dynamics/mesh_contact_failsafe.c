@@ -290,6 +290,40 @@ static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
 	}
 }
 
+/* The collider a zone holding collider vertices (pinned particles: a mesh's or a box's) is
+ * carried by: the one moving collider among those whose vertices zone members[first, last)
+ * holds; NULL when none moves, when a pinned member is no rigid collider's vertex (a cloth's
+ * pin, a deforming mesh's) or when two of its colliders move. */
+static const plait_collider *collider_within(const plait_sim *sim, int (*members)[2], int first, int last)
+{
+	const plait_particles *p = &sim->particles;
+	const plait_collider *moving = NULL;
+	for (int m = first; m < last; ++m) {
+		int i = members[m][1];
+		if (p->point[i].w != 0.0f) {
+			continue;
+		}
+		const plait_collider *found = NULL;
+		for (int k = 0; k < sim->collider_count && found == NULL; ++k) {
+			const plait_collider *c = &sim->colliders[k];
+			if (i >= c->first && i < c->first + c->count) {
+				found = c;
+			}
+		}
+		if (found == NULL || found->mesh_end != NULL) {
+			return NULL;
+		}
+		if (memcmp(&found->rigid_start, &found->rigid_end, sizeof found->rigid_start) == 0) {
+			continue;
+		}
+		if (moving != NULL && moving != found) {
+			return NULL;
+		}
+		moving = found;
+	}
+	return moving;
+}
+
 /* Zone members[first, last) still crossing after the zone rounds: back where the substep
  * began, which was free, but as seen from what they lay against. A zone beside a moving
  * collider goes where that collider carried its start: one left behind would end inside a
@@ -297,9 +331,11 @@ static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
  * above it and put it back again (the arm scene, performance.md "Session 24"). The zone moves
  * rigidly, so it crosses nothing within itself. Squeezed between that collider and another, it
  * slides out of both as one. Neither place was swept: the round after sweeps again, and the
- * last round (`carry` false) puts zones back at their start, which was free. A zone with pinned
- * vertices stays where the substep began (they keep to their own motion). Returns whether the
- * zone was carried. */
+ * last round (`carry` false) puts such zones back at their start, which was free. A zone that
+ * holds a moving collider's vertices (it crossed a mesh's or a box's edges or corners) is
+ * carried with that collider in every round: those vertices have moved with it, and the start
+ * was free as seen from it; one holding other pinned vertices stays where the substep began.
+ * Returns whether the zone was carried. */
 static bool carry_back(plait_sim *sim, int (*members)[2], int first, int last, bool carry)
 {
 	plait_particles *p = &sim->particles;
@@ -307,7 +343,12 @@ static bool carry_back(plait_sim *sim, int (*members)[2], int first, int last, b
 	for (int k = first; k < last && !pinned; ++k) {
 		pinned = p->point[members[k][1]].w == 0.0f;
 	}
-	const plait_collider *c = pinned || !carry ? NULL : collider_beside(sim, members, first, last);
+	const plait_collider *c = NULL;
+	if (pinned) {
+		c = collider_within(sim, members, first, last);
+	} else if (carry) {
+		c = collider_beside(sim, members, first, last);
+	}
 	bool presses = c != NULL && carry_presses(sim, c, members, first, last);
 	for (int k = first; k < last; ++k) {
 		int i = members[k][1];

@@ -373,6 +373,15 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 			upper.mesh = mesh_def(&upper_mesh);
 			fore.mesh = mesh_def(&fore_mesh);
 		}
+		if (scene->options.box_colliders) {
+			/* Square bars 10 cm across: their edges 7.1 cm from the axis, 1.4 cm inside the
+			 * sleeve. */
+			upper.shape = fore.shape = PLAIT_SHAPE_BOX;
+			upper.center = (plait_vec3){-0.2f, 0.0f, 0.0f};
+			upper.size = (plait_vec3){0.4f, 0.1f, 0.1f};
+			fore.center = (plait_vec3){0.175f, 0.0f, 0.0f};
+			fore.size = (plait_vec3){0.35f, 0.1f, 0.1f};
+		}
 		bool made = !plait_object_id_is_null(plait_create_collider(scene->world, &upper, error));
 		scene->animated = made ? plait_create_collider(scene->world, &fore, error) : (plait_object_id){0};
 		mesh_free(&upper_mesh);
@@ -449,8 +458,7 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 collide_scene_options collide_scene_default_options(void)
 {
-	return (collide_scene_options){
-	    plait_default_cloth_def().self_collision_flag, 0.0f, false, 0, 0, 0, false};
+	return (collide_scene_options){.self_flag = plait_default_cloth_def().self_collision_flag};
 }
 
 bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,

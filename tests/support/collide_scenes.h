@@ -43,6 +43,9 @@ typedef struct collide_scene_options {
 	 * each); drape and twist: the sphere as a closed mesh of 40 slices and stacks (3,120
 	 * triangles); not analytic shapes */
 	bool mesh_colliders;
+	/* arm: the upper arm and forearm as square box bars 10 cm across, not capsules (their
+	 * vertices, edges and faces meet the sleeve in the mesh contacts) */
+	bool box_colliders;
 } collide_scene_options;
 
 typedef struct collide_scene {
