@@ -91,6 +91,47 @@ static mesh tube(int around, int along, float r, float x0, float x1)
 	return m;
 }
 
+/* Appends one face of n vertices (a triangle in a quad slot when n is 3), its vertices after
+ * the first in reverse order when `reversed`. */
+static void add_face(mesh *m, const int *v, int n, bool reversed)
+{
+	m->sizes[m->face_count] = n;
+	int *f = m->indices + 4 * m->face_count++;
+	f[0] = v[0];
+	for (int q = 1; q < n; ++q) {
+		f[q] = v[reversed ? n - q : q];
+	}
+}
+
+/* The faces of a closed surface of `rings` rings of `slices` vertices (from vertex 2, ring by
+ * ring) between pole vertices 0 and 1: a fan round each pole, quads between rings. Wound
+ * counter-clockwise seen from outside when ring 0 runs counter-clockwise seen from pole 0;
+ * `reversed` for the other way round. */
+static void add_ring_faces(mesh *m, int slices, int rings, bool reversed)
+{
+	int last = 2 + (rings - 1) * slices;
+	for (int i = 0; i < slices; ++i) {
+		int next = (i + 1) % slices;
+		add_face(m, (int[3]){0, 2 + next, 2 + i}, 3, reversed);
+		for (int j = 0; j + 1 < rings; ++j) {
+			int a = 2 + j * slices;
+			add_face(m, (int[4]){a + i, a + next, a + slices + next, a + slices + i}, 4, reversed);
+		}
+		add_face(m, (int[3]){1, last + i, last + next}, 3, reversed);
+	}
+}
+
+/* Triangles stored in quad slots: the index list compacted. */
+static void compact_triangles(mesh *m)
+{
+	int at = 0;
+	for (int k = 0; k < m->face_count; ++k) {
+		for (int q = 0; q < m->sizes[k]; ++q) {
+			m->indices[at++] = m->indices[4 * k + q];
+		}
+	}
+}
+
 /* A capsule round the x axis from x0 to x1, of radius r, as a closed mesh: `slices` vertices
  * round each ring, `cap` rings to each hemisphere's pole, `segments` lengths along the cylinder;
  * every face wound counter-clockwise seen from outside. */
@@ -123,27 +164,9 @@ static mesh capsule_mesh(int slices, int cap, int segments, float r, float x0, f
 			m.x[2 + j * slices + i] = (plait_vec3){ring_x[j], ring_r[j] * cosf(a), ring_r[j] * sinf(a)};
 		}
 	}
-	for (int i = 0; i < slices; ++i) {
-		int next = (i + 1) % slices;
-		m.sizes[m.face_count] = 3;
-		int *f = m.indices + 4 * m.face_count++;
-		f[0] = 0;
-		f[1] = 2 + i;
-		f[2] = 2 + next;
-		for (int j = 0; j + 1 < rings; ++j) {
-			int a = 2 + j * slices;
-			add_quad(&m, a + i, a + slices + i, a + slices + next, a + next);
-		}
-		m.sizes[m.face_count] = 3;
-		f = m.indices + 4 * m.face_count++;
-		int last = 2 + (rings - 1) * slices;
-		f[0] = 1;
-		f[1] = last + next;
-		f[2] = last + i;
-	}
+	add_ring_faces(&m, slices, rings, true);
 	/* Each face turned to face away from the axis (the winding above is meant to, this makes
-	 * sure), then the triangles stored in quad slots compacted. */
-	int at = 0;
+	 * sure). */
 	for (int k = 0; k < m.face_count; ++k) {
 		int *f = m.indices + 4 * k, n = m.sizes[k];
 		plait_vec3 a = m.x[f[0]], b = m.x[f[1]], c = m.x[f[2]];
@@ -164,10 +187,8 @@ static mesh capsule_mesh(int slices, int cap, int segments, float r, float x0, f
 				f[n - 1 - q] = t;
 			}
 		}
-		for (int q = 0; q < n; ++q) {
-			m.indices[at++] = f[q];
-		}
 	}
+	compact_triangles(&m);
 	return m;
 }
 
@@ -187,32 +208,9 @@ static mesh sphere_mesh(int slices, int stacks, float r, plait_vec3 centre)
 			                 centre.z + r * sinf(polar) * sinf(a)};
 		}
 	}
-	for (int i = 0; i < slices; ++i) {
-		int next = (i + 1) % slices;
-		/* Outward-facing: counter-clockwise seen from outside. */
-		m.sizes[m.face_count] = 3;
-		int *f = m.indices + 4 * m.face_count++;
-		f[0] = 0;
-		f[1] = 2 + next;
-		f[2] = 2 + i;
-		for (int j = 1; j + 1 < stacks; ++j) {
-			int a = 2 + (j - 1) * slices;
-			add_quad(&m, a + i, a + next, a + slices + next, a + slices + i);
-		}
-		m.sizes[m.face_count] = 3;
-		f = m.indices + 4 * m.face_count++;
-		int last = 2 + (stacks - 2) * slices;
-		f[0] = 1;
-		f[1] = last + i;
-		f[2] = last + next;
-	}
-	/* Triangles stored in quad slots: compact the index list. */
-	int at = 0;
-	for (int k = 0; k < m.face_count; ++k) {
-		for (int q = 0; q < m.sizes[k]; ++q) {
-			m.indices[at++] = m.indices[4 * k + q];
-		}
-	}
+	/* Outward-facing: counter-clockwise seen from outside. */
+	add_ring_faces(&m, slices, stacks - 1, false);
+	compact_triangles(&m);
 	return m;
 }
 
