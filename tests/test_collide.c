@@ -156,6 +156,92 @@ Test(collide, a_pile_at_rest_keeps_its_list)
 	collide_scene_destroy(&scene);
 }
 
+/* Whether the list's plan (mesh_contact_plan.c) holds: the list is stored group by group, and
+ * no vertex that can move now is moved by two groups of one stage (slabs, even borders, odd
+ * borders), which the workers take side by side. Returns the number of slabs with pairs. */
+static int expect_plan_holds(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	cr_assert_geq(mc->pair_count, PLAN_LEAST_PAIRS, "the list is too short to be planned");
+	cr_assert(plait_mesh_contacts_plan(sim, mc));
+	cr_assert_eq(mc->group_start[0], 0);
+	for (int g = 0; g < PLAN_GROUPS; ++g) {
+		cr_assert_leq(mc->group_start[g], mc->group_start[g + 1]);
+		for (int k = mc->group_start[g]; k < mc->group_start[g + 1]; ++k) {
+			cr_assert_eq(mc->pair_group[k], g, "pair %d lies in group %d's place but is of group %d", k, g,
+			             mc->pair_group[k]);
+		}
+	}
+	cr_assert_leq(mc->group_start[PLAN_GROUPS], mc->pair_count);
+	int stages[4] = {0, PLAN_SLABS, PLAN_SLABS + PLAN_SLABS / 2, PLAN_GROUPS - 1};
+	int *group_of_vertex = malloc(sizeof(int) * (size_t)sim->particles.count);
+	int slabs = 0;
+	for (int part = 0; part < 3; ++part) {
+		for (int i = 0; i < sim->particles.count; ++i) {
+			group_of_vertex[i] = -1;
+		}
+		for (int g = stages[part]; g < stages[part + 1]; ++g) {
+			slabs += part == 0 && mc->group_start[g + 1] > mc->group_start[g];
+			for (int k = mc->group_start[g]; k < mc->group_start[g + 1]; ++k) {
+				const contact_pair *pair = &mc->pairs[k];
+				for (int m = 0; m < pair_size[pair->type] && pair->distance > 0.0f; ++m) {
+					int i = pair->v[m];
+					if (sim->particles.point[i].w == 0.0f) {
+						continue;
+					}
+					cr_assert(group_of_vertex[i] < 0 || group_of_vertex[i] == g,
+					          "vertex %d is moved by groups %d and %d of one stage", i, group_of_vertex[i],
+					          g);
+					group_of_vertex[i] = g;
+				}
+			}
+		}
+	}
+	free(group_of_vertex);
+	return slabs;
+}
+
+/* A long contact list (the pile of four 24 x 24 sheets lists 46,000 pairs) is kept in groups
+ * that the workers project side by side (mesh_contact_plan.c): the plan holds as the pile
+ * settles, mended list after mended list, and after a row of vertices across a sheet was pinned
+ * for a frame and let go: a plan made while they stood still treats them as tying no pairs
+ * together, so a frame's start drops it (plait_mesh_contacts_check_plan). test_threads compares
+ * the bits with 1, 2 and 8 workers. */
+Test(collide, a_long_contact_list_is_kept_in_groups_that_share_no_moving_vertex)
+{
+	collide_scene scene;
+	scene_totals t = run_scene(SCENE_PILE, 24, 24, &scene);
+	expect_clean(&t, "pile");
+	plait_sim *sim = &scene.world.world->sim;
+	cr_expect_geq(expect_plan_holds(sim), 3, "the pairs lie in fewer than three slabs");
+	plait_error error;
+	for (int f = 0; f < 6; ++f) {
+		cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
+		expect_plan_holds(sim);
+	}
+	plait_object_id sheet = scene.cloths[1];
+	int row = 24 * 12;
+	for (int k = 0; k < 24; ++k) {
+		plait_vec3 x;
+		cr_assert_eq(plait_object_get_positions(sheet, row + k, 1, &x, NULL), PLAIT_OK);
+		cr_assert_eq(plait_object_pin_vertex(sheet, row + k, x, &error), PLAIT_OK, "%s", error.message);
+	}
+	cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
+	expect_plan_holds(sim);
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	plait_mesh_contacts_check_plan(sim, mc); /* what a frame's start does: nothing changed */
+	cr_expect_eq(mc->plan_list, mc->list_changes, "a plan was dropped with no vertex pinned or let go");
+	for (int k = 0; k < 24; ++k) {
+		cr_assert_eq(plait_object_unpin_vertex(sheet, row + k, &error), PLAIT_OK, "%s", error.message);
+	}
+	plait_mesh_contacts_check_plan(sim, mc);
+	cr_expect_neq(mc->plan_list, mc->list_changes, "a plan made while vertices were pinned was kept");
+	expect_plan_holds(sim);
+	cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
+	expect_plan_holds(sim);
+	collide_scene_destroy(&scene);
+}
+
 Test(collide, a_sheet_on_a_spinning_sphere_twists_for_ten_seconds_without_crossing)
 {
 	collide_scene scene;

@@ -18,11 +18,13 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		sim->mesh_contacts_dirty = true;
 		mc->cull_flat = true;
 		mc->skip_smooth = true;
+		mc->plan_list = -1;
 		mc->patches_fitted_for = -1;
 	}
 	if (sim->mesh_contacts_dirty) {
 		mc->list_valid = false;
 		mc->pair_count = 0;
+		mc->list_changes += 1;
 		sim->mesh_contacts_dirty_objects = true;
 		if (!plait_mesh_contacts_build_elements(sim, mc)) {
 			return false;
@@ -73,6 +75,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	plait_mesh_contacts_free_pieces(mc, a);
+	plait_mesh_contacts_free_plan(mc, a);
 	plait_free(a, mc);
 	sim->mesh_contacts = NULL;
 }
@@ -93,6 +96,7 @@ void plait_mesh_contacts_begin_substep(plait_sim *sim)
 		mc->substep_serial += 1;
 		if (sim->substep == 0) {
 			plait_mesh_contacts_forget_rest_bounds(mc); /* positions may have been set between frames */
+			plait_mesh_contacts_check_plan(sim, mc);    /* and pins */
 		}
 	}
 }
@@ -147,14 +151,18 @@ static bool respond(plait_sim *sim, const contact_pair *pair, const float *g, ve
 		move = v3_mul_add(move, -removed, tangential);
 	}
 	vec3 step = v3_scale(move, 1.0f / denominator);
+	/* Only vertices that give way are written: one that never moves (inverse mass 0) may be
+	 * read by pairs projected side by side (mesh_contact_plan.c). */
 	for (int k = 0; k < count; ++k) {
 		int i = pair->v[k];
-		p->point[i].x = v3_mul_add(p->point[i].x, w[k] * g[k], step);
+		if (w[k] != 0.0f) {
+			p->point[i].x = v3_mul_add(p->point[i].x, w[k] * g[k], step);
+		}
 	}
 	return true;
 }
 
-static int project_pair(plait_sim *sim, contact_pair *pair)
+int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *ccd_hits)
 {
 	plait_particles *p = &sim->particles;
 	int type = pair->type, n = pair_size[type];
@@ -186,7 +194,7 @@ static int project_pair(plait_sim *sim, contact_pair *pair)
 			gather_points(p->x_prev, pair->v, n, start);
 			crossed = plait_mesh_contacts_paths_meet(type, start, x, 0.0f);
 			if (crossed) {
-				sim->ccd_hits += 1;
+				*ccd_hits += 1;
 			} else {
 				pair->side = -pair->side;
 				along = -along;
@@ -231,7 +239,7 @@ static int project_pair(plait_sim *sim, contact_pair *pair)
 			vec3 start[4];
 			gather_points(p->x_prev, pair->v, n, start);
 			crossed = plait_mesh_contacts_paths_meet(type, start, x, 0.0f);
-			sim->ccd_hits += crossed;
+			*ccd_hits += crossed;
 		}
 		if (crossed) {
 			normal = pair->direction;
@@ -288,11 +296,5 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		}
 		mc->gathered = true;
 	}
-	int contacts = 0;
-	for (int k = 0; k < mc->pair_count; ++k) {
-		if (mc->pairs[k].distance > 0.0f) {
-			contacts += project_pair(sim, &mc->pairs[k]);
-		}
-	}
-	return contacts;
+	return plait_mesh_contacts_project_list(sim, mc);
 }

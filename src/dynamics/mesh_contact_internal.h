@@ -156,6 +156,25 @@ typedef struct sweep_hit {
 
 #define HIT_ROOM 4 /* crossings a piece of a sweep keeps; one that finds more (rare) is swept again */
 
+/* Slabs a long contact list's space is cut into, and the groups of its projection order: a
+ * slab's own pairs each, pairs across each border between two slabs, the rest (see
+ * mesh_contact_plan.c). */
+#define PLAN_SLABS 16
+/* Lists shorter than this keep the gather's order (a length, not a thread count: the order must
+ * not depend on the threads). */
+#define PLAN_LEAST_PAIRS 16384
+#define PLAN_GROUPS (PLAN_SLABS + PLAN_SLABS - 1 + 1)
+#define SLAB_BINS 1024
+
+/* Where the slabs lie: along an axis (0, 1, 2) from `low`, SLAB_BINS bins of 1 / per_bin each,
+ * each bin to its slab (of `count`). */
+typedef struct plan_slabs {
+	int count; /* slabs, up to PLAN_SLABS */
+	int axis;
+	float low, per_bin;
+	uint8_t bin_slab[SLAB_BINS];
+} plan_slabs;
+
 typedef struct plait_mesh_contacts {
 	int element_count;
 	element *elements;
@@ -197,6 +216,24 @@ typedef struct plait_mesh_contacts {
 	bool gathered;   /* the candidates of this substep are ready */
 	bool list_valid; /* the list of the last gather may serve again (see plait_mesh_contacts_list_covers) */
 	int pair_count, pair_capacity;
+	/* The order a long list is kept in, for its projection on the workers (mesh_contact_plan.c).
+	 * list_changes counts the lists made (gathers and mendings); plan_list is the one the plan
+	 * was made or counted for (-1: none), plan_kept_list one whose first `planned` pairs a
+	 * mending kept in the plan's order, with their groups (pair_group, per pair). group_start:
+	 * where each group begins in the list (the pairs from group_start[PLAN_GROUPS] on are a
+	 * mending's, projected last). The slabs were cut for gather plan_listing (of listings).
+	 * Scratch: the spare list and groups of the plan's counting sort, its counts per chunk, and
+	 * per particle its slab and whether it could move at the plan (vertex_moves). */
+	long list_changes, plan_list, plan_kept_list, plan_listing;
+	int planned;
+	int group_start[PLAN_GROUPS + 1];
+	plan_slabs slabs;
+	int8_t *pair_group, *spare_group;
+	contact_pair *spare_pairs;
+	int (*plan_counts)[PLAN_GROUPS];
+	int8_t *vertex_slab;
+	uint8_t *vertex_moves;
+	int plan_pair_capacity, plan_particle_capacity;
 	contact_pair *pairs;
 	bool out_of_memory;   /* the candidate list could not grow: a contact may be left to the failsafe */
 	int traversal_sweeps; /* primitive pairs swept by the failsafe's last traversal (0 before it) */
@@ -511,6 +548,19 @@ bool plait_mesh_contacts_list_covers_except(plait_sim *sim, plait_mesh_contacts 
 
 /* The scratch of the work on the workers: freed, or made once (false when out of memory). */
 void plait_mesh_contacts_free_pieces(plait_mesh_contacts *mc, const plait_allocator *a);
+
+/* One projection of `pair` to its contact distance (mesh_contact.c), counting a CCD hit in
+ * *ccd_hits. Returns 1 when it moved the pair's vertices. */
+int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *ccd_hits);
+/* The list's pairs projected once, a list of PLAN_LEAST_PAIRS or more in its plan's order and on
+ * the workers (mesh_contact_plan.c); returns the contacts. */
+int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc);
+/* Puts the list in the plan's order, unless it is already; false when out of memory (the list
+ * then keeps its order and is projected one pair after another, which gives the same result). */
+bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc);
+void plait_mesh_contacts_free_plan(plait_mesh_contacts *mc, const plait_allocator *a);
+/* At a frame's start: a plan made before a vertex was pinned or unpinned is made again. */
+void plait_mesh_contacts_check_plan(const plait_sim *sim, plait_mesh_contacts *mc);
 bool plait_mesh_contacts_reserve_pieces(plait_mesh_contacts *mc, const plait_allocator *a);
 /* One piece of a traversal, its element pairs handed to pass. */
 void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, const gather_piece *piece);

@@ -395,6 +395,7 @@ static float path_guard(const plait_sim *sim, const plait_mesh_contacts *mc, int
 void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	mc->pair_count = 0;
+	mc->list_changes += 1;
 	mc->out_of_memory = false;
 	mc->gather_serial = mc->substep_serial;
 	mc->listings += 1;
@@ -655,7 +656,10 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 			mc->guard[i] = path_guard(sim, mc, i, bend);
 		}
 	}
-	int kept = 0;
+	/* The pairs kept keep the plan's order and their groups (mesh_contact_plan.c), when the list
+	 * had a plan. */
+	bool groups = mc->plan_list == mc->list_changes && mc->planned > 0;
+	int kept = 0, planned = 0;
 	for (int k = 0; k < mc->pair_count; ++k) {
 		const contact_pair *pair = &mc->pairs[k];
 		uint8_t any = 0;
@@ -663,10 +667,22 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 			any |= mc->around[pair->v[m]];
 		}
 		if (!any) {
-			mc->pairs[kept++] = *pair;
+			if (kept != k) { /* most pairs stay where they are */
+				mc->pairs[kept] = *pair;
+				if (groups && k < mc->planned) {
+					mc->pair_group[kept] = mc->pair_group[k];
+				}
+			}
+			planned += k < mc->planned;
+			kept += 1;
 		}
 	}
 	mc->pair_count = kept;
+	mc->list_changes += 1;
+	if (groups) {
+		mc->planned = planned;
+		mc->plan_kept_list = mc->list_changes;
+	}
 	mc->out_of_memory = false;
 	fit_boxes(sim, mc, false, 0.0f, false);
 	if (mc->features != NULL) {
