@@ -1068,17 +1068,17 @@ static plait_vec3 *collide_scene_positions(collide_scene_kind kind, int n, int f
  * the thin box (a sheet at 20 m/s onto 1 mm, where the failsafe acts in most frames), the
  * drape of two sheets and a small self-colliding hang (flat patches fitted and checked on the
  * workers, lists mended around strayed vertices on them) give the same bits with 1, 2 and 8
- * workers; so does a pile of four sheets, whose lists (up to 46,000 pairs) are long enough to be
- * projected on the workers, group beside group (mesh_contact_plan.c). */
+ * workers; so does a pile of four 32 x 32 sheets, whose lists (100,000 pairs as it lands) are
+ * long enough to be projected on the workers, group beside group (mesh_contact_plan.c). */
 Test(threads, collision_scenes_same_with_1_2_and_8_workers, .timeout = 600)
 {
 	collide_scene_kind kinds[4] = {SCENE_THIN_BOX, SCENE_DRAPE, SCENE_HANG_SELF, SCENE_PILE};
-	int frames[4] = {24, 40, 60, 30};
+	int frames[4] = {24, 40, 60, 36}, sizes[4] = {24, 24, 24, 32};
 	for (int k = 0; k < 4; ++k) {
 		int count1, count2, count8;
-		plait_vec3 *x1 = collide_scene_positions(kinds[k], 24, frames[k], 1, &count1);
-		plait_vec3 *x2 = collide_scene_positions(kinds[k], 24, frames[k], 2, &count2);
-		plait_vec3 *x8 = collide_scene_positions(kinds[k], 24, frames[k], 8, &count8);
+		plait_vec3 *x1 = collide_scene_positions(kinds[k], sizes[k], frames[k], 1, &count1);
+		plait_vec3 *x2 = collide_scene_positions(kinds[k], sizes[k], frames[k], 2, &count2);
+		plait_vec3 *x8 = collide_scene_positions(kinds[k], sizes[k], frames[k], 8, &count8);
 		cr_assert_eq(count1, count2);
 		cr_assert_eq(count1, count8);
 		cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0,

@@ -161,8 +161,11 @@ typedef struct sweep_hit {
  * mesh_contact_plan.c). */
 #define PLAN_SLABS 16
 /* Lists shorter than this keep the gather's order (a length, not a thread count: the order must
- * not depend on the threads). */
-#define PLAN_LEAST_PAIRS 16384
+ * not depend on the threads). Shorter lists are mostly gathered again at every substep (a plan,
+ * a pass or two over the list, then costs about what two threads save; on one thread it is
+ * lost: hang-self --stiff, whose lists pass 16,384 pairs, was 4% slower so) or hold too few
+ * pairs to share. */
+#define PLAN_LEAST_PAIRS 65536
 #define PLAN_GROUPS (PLAN_SLABS + PLAN_SLABS - 1 + 1)
 #define SLAB_BINS 1024
 

@@ -396,6 +396,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	mc->pair_count = 0;
 	mc->list_changes += 1;
+	mc->planned = 0; /* a new list, in the gather's order (mesh_contact_plan.c) */
 	mc->out_of_memory = false;
 	mc->gather_serial = mc->substep_serial;
 	mc->listings += 1;
@@ -679,10 +680,8 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	mc->pair_count = kept;
 	mc->list_changes += 1;
-	if (groups) {
-		mc->planned = planned;
-		mc->plan_kept_list = mc->list_changes;
-	}
+	mc->planned = groups ? planned : 0;
+	mc->plan_kept_list = groups ? mc->list_changes : -1;
 	mc->out_of_memory = false;
 	fit_boxes(sim, mc, false, 0.0f, false);
 	if (mc->features != NULL) {

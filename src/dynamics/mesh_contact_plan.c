@@ -272,7 +272,7 @@ bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc)
 		mc->plan_list = mc->list_changes;
 		return true;
 	}
-	if (mc->plan_listing != mc->listings || mc->planned == 0) {
+	if (mc->plan_listing != mc->listings) {
 		cut_slabs(sim, mc, &mc->slabs);
 		mc->plan_listing = mc->listings;
 	}
