@@ -173,14 +173,14 @@ static int expect_plan_holds(plait_sim *sim)
 		}
 	}
 	cr_assert_leq(mc->group_start[PLAN_GROUPS], mc->pair_count);
-	int stages[4] = {0, PLAN_SLABS, PLAN_SLABS + PLAN_SLABS / 2, PLAN_GROUPS - 1};
+
 	int *group_of_vertex = malloc(sizeof(int) * (size_t)sim->particles.count);
 	int slabs = 0;
-	for (int part = 0; part < 3; ++part) {
+	for (int part = 0; part < PLAN_STAGES; ++part) {
 		for (int i = 0; i < sim->particles.count; ++i) {
 			group_of_vertex[i] = -1;
 		}
-		for (int g = stages[part]; g < stages[part + 1]; ++g) {
+		for (int g = plan_stage_start[part]; g < plan_stage_start[part + 1]; ++g) {
 			slabs += part == 0 && mc->group_start[g + 1] > mc->group_start[g];
 			for (int k = mc->group_start[g]; k < mc->group_start[g + 1]; ++k) {
 				const contact_pair *pair = &mc->pairs[k];
@@ -215,10 +215,15 @@ Test(collide, a_long_contact_list_is_kept_in_groups_that_share_no_moving_vertex)
 	plait_sim *sim = &scene.world.world->sim;
 	cr_expect_geq(expect_plan_holds(sim), 3, "the pairs lie in fewer than three slabs");
 	plait_error error;
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	long projections = mc->plan_projections;
 	for (int f = 0; f < 6; ++f) {
 		cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
 		expect_plan_holds(sim);
 	}
+	/* 6 frames of 3 substeps, each with its collision iterations, all on the plan. */
+	cr_expect_geq(mc->plan_projections - projections, 6 * 3, "%ld projections on a plan in 6 frames",
+	              mc->plan_projections - projections);
 	plait_object_id sheet = scene.cloths[1];
 	int row = 32 * 16;
 	for (int k = 0; k < 32; ++k) {
@@ -228,13 +233,12 @@ Test(collide, a_long_contact_list_is_kept_in_groups_that_share_no_moving_vertex)
 	}
 	cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
 	expect_plan_holds(sim);
-	plait_mesh_contacts *mc = sim->mesh_contacts;
-	plait_mesh_contacts_check_plan(sim, mc); /* what a frame's start does: nothing changed */
+	plait_mesh_contacts_check_plan(sim, sim->mesh_contacts); /* a frame's start: nothing changed */
 	cr_expect_eq(mc->plan_list, mc->list_changes, "a plan was dropped with no vertex pinned or let go");
 	for (int k = 0; k < 32; ++k) {
 		cr_assert_eq(plait_object_unpin_vertex(sheet, row + k, &error), PLAIT_OK, "%s", error.message);
 	}
-	plait_mesh_contacts_check_plan(sim, mc);
+	plait_mesh_contacts_check_plan(sim, sim->mesh_contacts);
 	cr_expect_neq(mc->plan_list, mc->list_changes, "a plan made while vertices were pinned was kept");
 	expect_plan_holds(sim);
 	cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);

@@ -167,6 +167,15 @@ typedef struct sweep_hit {
  * pairs to share. */
 #define PLAN_LEAST_PAIRS 65536
 #define PLAN_GROUPS (PLAN_SLABS + PLAN_SLABS - 1 + 1)
+/* The groups: one per slab, one per border between two slabs (even borders, then odd), then the
+ * pairs reaching wider. The stages the workers take one after another: slabs, even borders, odd
+ * borders (groups [plan_stage_start[k], plan_stage_start[k + 1])); the wide group last, on the
+ * calling thread. */
+#define PLAN_FIRST_EVEN PLAN_SLABS
+#define PLAN_FIRST_ODD (PLAN_FIRST_EVEN + PLAN_SLABS / 2)
+#define PLAN_WIDE_GROUP (PLAN_FIRST_ODD + (PLAN_SLABS - 1) / 2)
+#define PLAN_STAGES 3
+static const int plan_stage_start[PLAN_STAGES + 1] = {0, PLAN_FIRST_EVEN, PLAN_FIRST_ODD, PLAN_WIDE_GROUP};
 #define SLAB_BINS 1024
 
 /* Where the slabs lie: along an axis (0, 1, 2) from `low`, SLAB_BINS bins of 1 / per_bin each,
@@ -228,6 +237,7 @@ typedef struct plait_mesh_contacts {
 	 * Scratch: the spare list and groups of the plan's counting sort, its counts per chunk, and
 	 * per particle its slab and whether it could move at the plan (vertex_moves). */
 	long list_changes, plan_list, plan_kept_list, plan_listing;
+	long plan_projections; /* projections on a plan (a count, for tests) */
 	int planned;
 	int group_start[PLAN_GROUPS + 1];
 	plan_slabs slabs;
@@ -559,7 +569,8 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
  * the workers (mesh_contact_plan.c); returns the contacts. */
 int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc);
 /* Puts the list in the plan's order, unless it is already; false when out of memory (the list
- * then keeps its order and is projected one pair after another, which gives the same result). */
+ * then keeps its order and is projected one pair after another: another result than the plan's,
+ * but still the same for any number of threads). */
 bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc);
 void plait_mesh_contacts_free_plan(plait_mesh_contacts *mc, const plait_allocator *a);
 /* At a frame's start: a plan made before a vertex was pinned or unpinned is made again. */

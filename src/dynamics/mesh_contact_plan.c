@@ -9,7 +9,8 @@
  * vertex that can move belongs to the slab it lies in. First come
  * the pairs whose moving vertices all lie in one slab, slab after slab; then those across the
  * border between slabs s and s + 1, for even s, then for odd s; then the rest (across three
- * slabs or more), each group in the gather's order. The groups of one stage share no moving
+ * slabs or more), each group in the list's order (the gather's, or the last plan's with a
+ * mending's pairs after it). The groups of one stage share no moving
  * vertex, so the workers take them side by side with the same result as one after another: the
  * order, and so every bit of the result, does not depend on the number of threads. Vertices
  * that never move (inverse mass 0: pins, a collider's vertices) tie no pairs together;
@@ -18,9 +19,11 @@
  * The list is stored in that order (each pair moved once, at the plan), so the projection and
  * the failsafe's sweeps read it straight through. A mending keeps the order of the pairs it
  * keeps and adds its own at the end (plait_mesh_contacts_relist_around): those are projected
- * after the groups, one by one, until the next plan. A plan is made after each gather, once a
- * mending's pairs are an eighth of the list, and at a frame's start if a vertex was pinned or
- * unpinned since the last. Shorter lists keep the
+ * after the groups, one by one, until the next plan. A plan is made at the first projection of
+ * a long list after a gather, after a mending of a list that had none, and once a mending's
+ * pairs are more than an eighth of the list; a frame's start drops the plan if a vertex was
+ * pinned or unpinned since (inverse masses change only between frames, through the pin calls:
+ * within a frame the groups stay apart). Shorter lists keep the
  * gather's order, projected on the calling thread: sharing them would cost more than it saves. */
 #include "dynamics/mesh_contact_internal.h"
 
@@ -28,10 +31,6 @@
 #include <string.h>
 
 #define PLAN_CHUNK 8192
-/* Groups: one per slab, one per border between two slabs (even, then odd), the wide pairs. */
-#define FIRST_EVEN PLAN_SLABS
-#define FIRST_ODD (FIRST_EVEN + PLAN_SLABS / 2)
-#define WIDE_GROUP (FIRST_ODD + (PLAN_SLABS - 1) / 2)
 
 void plait_mesh_contacts_free_plan(plait_mesh_contacts *mc, const plait_allocator *a)
 {
@@ -168,9 +167,9 @@ static int group_of(const plait_sim *sim, const plait_mesh_contacts *mc, const c
 		return high < 0 ? 0 : low; /* one that moves nothing goes anywhere */
 	}
 	if (high == low + 1) {
-		return low % 2 == 0 ? FIRST_EVEN + low / 2 : FIRST_ODD + low / 2;
+		return low % 2 == 0 ? PLAN_FIRST_EVEN + low / 2 : PLAN_FIRST_ODD + low / 2;
 	}
-	return WIDE_GROUP;
+	return PLAN_WIDE_GROUP;
 }
 
 /* A plan is made on the workers: the vertices' slabs, then each chunk of PLAN_CHUNK pairs counts
@@ -244,6 +243,7 @@ void plait_mesh_contacts_check_plan(const plait_sim *sim, plait_mesh_contacts *m
 	if (mc->planned > 0 && (mc->plan_particle_capacity < sim->particles.count || moves_changed(sim, mc))) {
 		mc->plan_list = -1;
 		mc->plan_kept_list = -1;
+		mc->planned = 0;
 	}
 }
 
@@ -255,8 +255,8 @@ bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc)
 	if (!reserve_plan(sim, mc)) {
 		return false;
 	}
-	/* Pairs a mending added are projected one by one after the groups: once they are an
-	 * eighth of the list, it is planned anew. */
+	/* Pairs a mending added are projected one by one after the groups: once they are more than
+	 * an eighth of the list, it is planned anew. */
 	if (mc->plan_kept_list == mc->list_changes && mc->planned > 0 &&
 	    mc->pair_count - mc->planned <= mc->pair_count / 8) {
 		/* A mending kept the first `planned` pairs in their groups' order: count them again. */
@@ -336,14 +336,16 @@ int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc)
 	if (!planned) {
 		return project_range(sim, mc, 0, mc->pair_count, &sim->ccd_hits);
 	}
+	mc->plan_projections += 1;
 	project_job job = {sim, mc, 0, 0};
 	/* The stages, each after the one before: slabs, even borders, odd borders. Then the wide
 	 * pairs and those a mending added, on the calling thread. */
-	int stages[4] = {0, FIRST_EVEN, FIRST_ODD, WIDE_GROUP};
-	for (int k = 0; k < 3; ++k) {
-		plait_parallel_for(&sim->parallel, project_groups, &job, stages[k], stages[k + 1], 1);
+	for (int k = 0; k < PLAN_STAGES; ++k) {
+		plait_parallel_for(&sim->parallel, project_groups, &job, plan_stage_start[k], plan_stage_start[k + 1],
+		                   1);
 	}
 	sim->ccd_hits += atomic_load_explicit(&job.ccd_hits, memory_order_relaxed);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
-	return contacts + project_range(sim, mc, mc->group_start[WIDE_GROUP], mc->pair_count, &sim->ccd_hits);
+	return contacts +
+	       project_range(sim, mc, mc->group_start[PLAN_WIDE_GROUP], mc->pair_count, &sim->ccd_hits);
 }
