@@ -22,6 +22,7 @@
  *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
  *                      [--mesh-colliders] (arm, drape, twist: the capsules and spheres as meshes)
  *                      [--box-colliders] (arm: the capsules as square box bars)
+ *                      [--coarse-floor] (pile: onto a coarse sheet of 3 x 3 vertices)
  *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
  *                      [--sphere-slices S] (hang-self: the sphere mesh's slices and stacks, 50)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
@@ -190,6 +191,8 @@ int main(int argc, char **argv)
 			options.mesh_colliders = true;
 		} else if (strcmp(argv[a], "--box-colliders") == 0) {
 			options.box_colliders = true;
+		} else if (strcmp(argv[a], "--coarse-floor") == 0) {
+			options.coarse_floor = true;
 		} else if (strcmp(argv[a], "--stiff") == 0) {
 			options.stiff = true;
 		} else if (strcmp(argv[a], "--substeps") == 0 && a + 1 < argc) {
@@ -212,7 +215,8 @@ int main(int argc, char **argv)
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
 				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--stiff] [--mesh-colliders] [--box-colliders] [--substeps S] [--sphere-slices S] "
+				        "[--stiff] [--mesh-colliders] [--box-colliders] [--coarse-floor] [--substeps S] "
+				        "[--sphere-slices S] "
 				        "[--verbose] "
 				        "[--per-frame] [--variants K]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");

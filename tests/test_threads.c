@@ -1030,8 +1030,31 @@ Test(threads, hang_128_example_scene_loads, .timeout = 300)
 }
 
 /* A collision scene's cloth positions after `frames` frames with worker_count workers. */
-static plait_vec3 *collide_scene_positions(collide_scene_kind kind, int n, int frames, int worker_count,
-                                           int *count)
+/* A collision scene run on the workers: with options, and (pin_frames > 0) with a row of 32
+ * vertices across its second cloth pinned where they are for pin_frames frames from frame
+ * pin_at, then let go. */
+typedef struct threads_scene {
+	collide_scene_kind kind;
+	int n, frames;
+	collide_scene_options options;
+	int pin_at, pin_frames;
+} threads_scene;
+
+static void pin_row(const collide_scene *scene, bool pin)
+{
+	plait_object_id sheet = scene->cloths[1];
+	plait_error error;
+	for (int k = 0; k < 32; ++k) {
+		int v = 32 * 16 + k;
+		plait_vec3 x;
+		cr_assert_eq(plait_object_get_positions(sheet, v, 1, &x, NULL), PLAIT_OK);
+		plait_result r =
+		    pin ? plait_object_pin_vertex(sheet, v, x, &error) : plait_object_unpin_vertex(sheet, v, &error);
+		cr_assert_eq(r, PLAIT_OK, "%s", error.message);
+	}
+}
+
+static plait_vec3 *collide_scene_positions(const threads_scene *run, int worker_count, int *count)
 {
 	plait_thread_pool *pool = NULL;
 	plait_world_def wdef = plait_default_world_def();
@@ -1042,8 +1065,12 @@ static plait_vec3 *collide_scene_positions(collide_scene_kind kind, int n, int f
 	plait_thread_pool_attach(pool, &wdef);
 	collide_scene scene;
 	plait_error error = {0};
-	cr_assert(collide_scene_create(&scene, kind, n, &wdef, &error), "%s", error.message);
-	for (int f = 0; f < frames; ++f) {
+	cr_assert(collide_scene_create_with(&scene, run->kind, run->n, &wdef, &run->options, &error), "%s",
+	          error.message);
+	for (int f = 0; f < run->frames; ++f) {
+		if (run->pin_frames > 0 && (f == run->pin_at || f == run->pin_at + run->pin_frames)) {
+			pin_row(&scene, f == run->pin_at);
+		}
 		cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
 	}
 	*count = 0;
@@ -1069,22 +1096,30 @@ static plait_vec3 *collide_scene_positions(collide_scene_kind kind, int n, int f
  * drape of two sheets and a small self-colliding hang (flat patches fitted and checked on the
  * workers, lists mended around strayed vertices on them) give the same bits with 1, 2 and 8
  * workers; so does a pile of four 32 x 32 sheets, whose lists (100,000 pairs as it lands) are
- * long enough to be projected on the workers, group beside group (mesh_contact_plan.c). */
+ * long enough to be projected on the workers, group beside group (mesh_contact_plan.c): with a
+ * row across a sheet pinned for two frames (groups side by side then share pinned vertices),
+ * and falling onto a coarse sheet (pairs across many slabs, projected after the groups). */
 Test(threads, collision_scenes_same_with_1_2_and_8_workers, .timeout = 600)
 {
-	collide_scene_kind kinds[4] = {SCENE_THIN_BOX, SCENE_DRAPE, SCENE_HANG_SELF, SCENE_PILE};
-	int frames[4] = {24, 40, 60, 36}, sizes[4] = {24, 24, 24, 32};
-	for (int k = 0; k < 4; ++k) {
+	collide_scene_options plain = collide_scene_default_options(), coarse = plain;
+	coarse.coarse_floor = true;
+	threads_scene runs[5] = {{SCENE_THIN_BOX, 24, 24, plain, 0, 0},
+	                         {SCENE_DRAPE, 24, 40, plain, 0, 0},
+	                         {SCENE_HANG_SELF, 24, 60, plain, 0, 0},
+	                         {SCENE_PILE, 32, 36, plain, 30, 2},
+	                         {SCENE_PILE, 32, 38, coarse, 0, 0}};
+	for (int k = 0; k < 5; ++k) {
 		int count1, count2, count8;
-		plait_vec3 *x1 = collide_scene_positions(kinds[k], sizes[k], frames[k], 1, &count1);
-		plait_vec3 *x2 = collide_scene_positions(kinds[k], sizes[k], frames[k], 2, &count2);
-		plait_vec3 *x8 = collide_scene_positions(kinds[k], sizes[k], frames[k], 8, &count8);
+		plait_vec3 *x1 = collide_scene_positions(&runs[k], 1, &count1);
+		plait_vec3 *x2 = collide_scene_positions(&runs[k], 2, &count2);
+		plait_vec3 *x8 = collide_scene_positions(&runs[k], 8, &count8);
 		cr_assert_eq(count1, count2);
 		cr_assert_eq(count1, count8);
+		const char *name = collide_scene_names[runs[k].kind];
 		cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0,
-		          "%s: 2 workers give other positions than 1", collide_scene_names[kinds[k]]);
+		          "%s (%d): 2 workers give other positions than 1", name, k);
 		cr_expect(memcmp(x1, x8, sizeof *x1 * (size_t)count1) == 0,
-		          "%s: 8 workers give other positions than 1", collide_scene_names[kinds[k]]);
+		          "%s (%d): 8 workers give other positions than 1", name, k);
 		free(x1);
 		free(x2);
 		free(x8);

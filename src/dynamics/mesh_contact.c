@@ -19,6 +19,7 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		mc->cull_flat = true;
 		mc->skip_smooth = true;
 		mc->plan_list = -1;
+		mc->plan_failed_list = -1;
 		mc->patches_fitted_for = -1;
 	}
 	if (sim->mesh_contacts_dirty) {
@@ -277,7 +278,9 @@ int plait_mesh_contacts_project(plait_sim *sim)
 	}
 	if (!mc->gathered) {
 		/* A list that holds but for a few vertices pushed off their paths is mended around
-		 * them; otherwise it is gathered again. */
+		 * them, unless a gather is expected to meet fewer element pairs (a cloth falling free,
+		 * whose flat patches a gather passes over whole, while a mending meets each strayed
+		 * vertex's neighbours); otherwise it is gathered again. */
 		int strays = 0, count = sim->particles.count;
 		bool holds = plait_mesh_contacts_list_covers_except(sim, mc, mc->around, &strays);
 		if (mc->list_valid && mc->substep_serial - mc->gather_serial == 1) {
@@ -286,7 +289,7 @@ int plait_mesh_contacts_project(plait_sim *sim)
 			 * far as that needs (plait_mesh_contacts_gather). */
 			mc->short_lists = !mc->paths_kept;
 		}
-		if (holds && plait_mesh_contacts_few_strays(strays, count)) {
+		if (holds && plait_mesh_contacts_few_strays(strays, count) && plait_mesh_contacts_mending_pays(mc)) {
 			plait_mesh_contacts_relist_around(sim, mc);
 		} else if (!holds || strays > 0) {
 			plait_mesh_contacts_gather(sim, mc);

@@ -145,6 +145,7 @@ typedef struct piece_list {
 	int offset; /* where its pairs go in the joined list */
 	bool full;
 	int features_kept, features_left_out;
+	long met; /* element pairs it met */
 } piece_list;
 
 /* A crossing found by a failsafe sweep on a worker, joined into its impact zone afterwards on
@@ -237,6 +238,7 @@ typedef struct plait_mesh_contacts {
 	 * Scratch: the spare list and groups of the plan's counting sort, its counts per chunk, and
 	 * per particle its slab and whether it could move at the plan (vertex_moves). */
 	long list_changes, plan_list, plan_kept_list, plan_listing;
+	long plan_failed_list; /* a list whose plan found no memory (-1: none): projected in order */
 	long plan_projections; /* projections on a plan (a count, for tests) */
 	int planned;
 	int group_start[PLAN_GROUPS + 1];
@@ -269,6 +271,12 @@ typedef struct plait_mesh_contacts {
 	int around_count, around_capacity;
 	piece_list *around_lists;
 	float around_pairs_per_element;
+	/* What listings cost, in element pairs met: the last gather's, and the last mending's per
+	 * element around a strayed vertex (0 before the first). A list is mended only where that is
+	 * expected to meet fewer than gathering it again (plait_mesh_contacts_mending_pays). */
+	long gather_met;
+	float mend_met_per_element;
+	long listing_met; /* element pairs met by every gather and mending so far (a count, for tests) */
 	/* The list holds every pair that can touch or cross as long as every vertex keeps within its
 	 * guard of its path: the straight one it was on at the gather for LIST_SUBSTEPS substeps
 	 * after the gather's, then at that path's end (path_end), for up to LIST_LIFE substeps
@@ -395,6 +403,7 @@ typedef struct pair_pass {
 	bool fixed_capacity, full;
 	int overflow;
 	int features_kept, features_left_out; /* STAGE_GATHER: see plait_mesh_contacts */
+	long met;                             /* element pairs met (visit_elements) */
 	/* STAGE_FAILSAFE on a worker: crossings go here (room for HIT_ROOM; `full` past it) instead
 	 * of into the impact zones. */
 	sweep_hit *hits_out;
@@ -537,7 +546,10 @@ bool plait_mesh_contacts_relist_on_workers(plait_sim *sim, plait_mesh_contacts *
  * -1 when out of memory. */
 int plait_mesh_contacts_collect_around(plait_sim *sim, plait_mesh_contacts *mc);
 /* mc->element_around from mc->around: the elements with a flagged vertex. */
-void plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
+int plait_mesh_contacts_mark_elements(plait_mesh_contacts *mc);
+/* Whether re-listing around the vertices flagged in mc->around (marking their elements) is
+ * expected to meet fewer element pairs than a gather. */
+bool plait_mesh_contacts_mending_pays(plait_mesh_contacts *mc);
 /* Each element pair with a flagged element (mc->element_around) whose boxes overlap (between
  * objects within their allowance, with_allowance), once, handed to visit in global element
  * numbers: each flagged element's box queried against the trees of the objects it meets. */

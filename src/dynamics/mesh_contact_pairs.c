@@ -677,6 +677,7 @@ static void gather_triangle_pair(pair_pass *pass, int a, int b, const plait_mate
 static void visit_elements(int a, int b, void *context)
 {
 	pair_pass *pass = context;
+	pass->met += 1;
 	const plait_mesh_contacts *mc = pass->mc;
 	const element *ea = &mc->elements[a], *eb = &mc->elements[b];
 	const plait_material *ma = &pass->sim->materials[ea->material];

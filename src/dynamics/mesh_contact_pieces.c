@@ -158,6 +158,7 @@ static void list_part_range(void *context, int begin, int end)
 		list->needed = list->count + pass.overflow;
 		list->features_kept = pass.features_kept;
 		list->features_left_out = pass.features_left_out;
+		list->met = pass.met;
 	}
 }
 
@@ -223,9 +224,11 @@ static bool list_parts(parts_job *job, int count, pair_pass *out)
 			job->list_part(job, &again, k);
 			list->features_kept = again.features_kept;
 			list->features_left_out = again.features_left_out;
+			list->met = again.met;
 		}
 		out->features_kept += list->features_kept;
 		out->features_left_out += list->features_left_out;
+		out->met += list->met;
 		list->offset = total;
 		total += list->count;
 	}

@@ -252,7 +252,11 @@ bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc)
 	if (mc->plan_list == mc->list_changes) {
 		return true;
 	}
+	if (mc->plan_failed_list == mc->list_changes) {
+		return false; /* out of memory for this list's plan: tried once */
+	}
 	if (!reserve_plan(sim, mc)) {
+		mc->plan_failed_list = mc->list_changes;
 		return false;
 	}
 	/* Pairs a mending added are projected one by one after the groups: once they are more than

@@ -326,6 +326,15 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		}
 		cloth.self_collide = true;
 		bool ok = true;
+		if (scene->options.coarse_floor) {
+			mesh m = sheet(3, 1.2f, 0.02f, 0.0f, 0.0f, 0.0f);
+			int corners[4] = {0, 2, 6, 8};
+			plait_cloth_def floor = cloth;
+			floor.pins = corners;
+			floor.pin_count = 4;
+			ok = add_cloth(scene, &m, &floor, error);
+			mesh_free(&m);
+		}
 		for (int k = 0; k < 4 && ok; ++k) {
 			mesh m = sheet(n, 1.0f, 0.1f + 0.15f * (float)k, 23.0f * (float)k, 0.07f * (float)(k % 2),
 			               -0.05f * (float)(k / 2));

@@ -19,7 +19,7 @@ typedef enum collide_scene_kind {
 
 extern const char *const collide_scene_names[SCENE_COUNT];
 
-#define COLLIDE_SCENE_MAX_CLOTHS 4
+#define COLLIDE_SCENE_MAX_CLOTHS 5
 
 /* Variations of the scenes for benchmarks and tests. */
 typedef struct collide_scene_options {
@@ -46,6 +46,10 @@ typedef struct collide_scene_options {
 	/* arm: the upper arm and forearm as square box bars 10 cm across, not capsules (their
 	 * vertices, edges and faces meet the sleeve in the mesh contacts) */
 	bool box_colliders;
+	/* pile: the four sheets fall onto a coarse sheet lying on the ground (3 x 3 vertices, 1.2 m
+	 * across, its corners pinned), whose long edges and large triangles make contact pairs
+	 * that reach across the slabs a long list is planned in (mesh_contact_plan.c) */
+	bool coarse_floor;
 } collide_scene_options;
 
 typedef struct collide_scene {
