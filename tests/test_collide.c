@@ -133,6 +133,88 @@ Test(collide, a_cloth_falling_free_is_gathered_again_not_mended)
 	collide_scene_destroy(&scene);
 }
 
+/* Element pairs a query around flagged elements met, and those of them within one patch the
+ * failsafe found flat (mc->element_flat, one object). */
+typedef struct around_tally {
+	const plait_mesh_contacts *mc;
+	long all, within;
+} around_tally;
+
+static int object_of_element(const plait_mesh_contacts *mc, int e)
+{
+	int k = 0;
+	while (k + 1 < mc->object_count && e >= mc->objects[k + 1].first) {
+		++k;
+	}
+	return k;
+}
+
+static void tally_around(int a, int b, void *context)
+{
+	around_tally *t = context;
+	t->all += 1;
+	t->within += t->mc->element_flat[a] >= 0 && t->mc->element_flat[a] == t->mc->element_flat[b] &&
+	             object_of_element(t->mc, a) == object_of_element(t->mc, b);
+}
+
+/* Flags every ninth vertex of the cloths as strayed, as a substep's start would. */
+static void flag_strays(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	for (int i = 0; i < sim->particles.count; ++i) {
+		mc->around[i] = mc->object_of[i] >= 0 && i % 9 == 0 && sim->particles.point[i].w > 0.0f;
+	}
+}
+
+/* A gather passes over the pairs within a flat patch; so does the mending of a resting list,
+ * within a patch the gather passed over that the last substep's failsafe found still flat
+ * along that substep's paths (mc->around_flat). Two piles at rest, the same bits: mended
+ * around the same vertices, the one whose failsafe finding is forgotten meets more element
+ * pairs. And a query around flagged elements meets every pair but those within one such
+ * patch. */
+Test(collide, a_mending_passes_over_pairs_within_a_patch_that_kept_flat)
+{
+	collide_scene scenes[2];
+	for (int k = 0; k < 2; ++k) {
+		scene_totals t = run_scene(SCENE_PILE, 24, 60, &scenes[k]);
+		expect_clean(&t, "pile");
+	}
+	plait_sim *sim[2] = {&scenes[0].world.world->sim, &scenes[1].world.world->sim};
+	plait_mesh_contacts *mc[2] = {sim[0]->mesh_contacts, sim[1]->mesh_contacts};
+	cr_assert_eq(mc[0]->element_flat_serial, mc[0]->substep_serial,
+	             "the last substep's failsafe found no patch flat, so nothing is tested");
+
+	/* The query: with and without passing over pairs within a patch. */
+	flag_strays(sim[0]);
+	plait_mesh_contacts_mark_elements(mc[0]);
+	around_tally with = {mc[0], 0, 0}, without = {mc[0], 0, 0};
+	mc[0]->around_flat = true;
+	plait_mesh_contacts_query_around(sim[0], mc[0], true, tally_around, &with);
+	mc[0]->around_flat = false;
+	plait_mesh_contacts_query_around(sim[0], mc[0], true, tally_around, &without);
+	cr_expect_gt(without.within, 0, "no pair lies within a flat patch, so nothing is tested");
+	cr_expect_eq(with.within, 0, "%ld pairs within a flat patch were met", with.within);
+	cr_expect_eq(with.all, without.all - without.within, "%ld pairs met, %ld of %ld expected", with.all,
+	             without.all - without.within, without.all);
+
+	/* The mending, in the next substep, with and without the failsafe's finding. */
+	mc[1]->element_flat_serial = -1;
+	float per_element[2];
+	for (int k = 0; k < 2; ++k) {
+		flag_strays(sim[k]);
+		mc[k]->substep_serial += 1;
+		plait_mesh_contacts_relist_around(sim[k], mc[k]);
+		cr_assert(!mc[k]->around_flat, "a mending left its queries passing over flat patches");
+		per_element[k] = mc[k]->mend_met_per_element;
+	}
+	cr_expect_lt(per_element[0], per_element[1],
+	             "%.1f element pairs met per element, %.1f without the finding", per_element[0],
+	             per_element[1]);
+	for (int k = 0; k < 2; ++k) {
+		collide_scene_destroy(&scenes[k]);
+	}
+}
+
 Test(collide, a_sheet_thrown_at_20_m_per_s_onto_a_1_mm_box_does_not_pass_through)
 {
 	scene_totals t = run_scene(SCENE_THIN_BOX, 16, 0, NULL);

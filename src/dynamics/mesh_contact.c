@@ -20,6 +20,7 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		mc->skip_smooth = true;
 		mc->plan_list = -1;
 		mc->plan_failed_list = -1;
+		mc->element_flat_serial = -1;
 		mc->patches_fitted_for = -1;
 	}
 	if (sim->mesh_contacts_dirty) {

@@ -717,6 +717,7 @@ static bool check_passed_over(plait_sim *sim, plait_mesh_contacts *mc)
 			plait_parallel_for(&sim->parallel, check_nodes, &job, 0, o->tree.node_count, CHECK_GRAIN);
 		}
 	}
+	mc->element_flat_serial = mc->substep_serial;
 	return true;
 }
 
@@ -839,8 +840,10 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 		if (hits == 0) {
 			break;
 		}
-		/* The zones move vertices after their pairs were measured. */
+		/* The zones move vertices after their pairs were measured, and after their patches were
+		 * found flat. */
 		plait_mesh_contacts_forget_rest_bounds(mc);
+		mc->element_flat_serial = -1;
 		sim->ccd_hits += hits;
 		/* Zone by zone: members sorted by root. */
 		for (int k = 0; k < mc->touched_count; ++k) {

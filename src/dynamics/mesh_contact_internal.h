@@ -326,8 +326,13 @@ typedef struct plait_mesh_contacts {
 	 * whether it has such a vertex. */
 	uint8_t *around;
 	/* Per element: the node of a patch the gather passed over that kept flat along this
-	 * substep's paths (its rest pairs cannot cross), or -1 (the failsafe's, round 0). */
+	 * substep's paths (its rest pairs cannot cross), or -1 (the failsafe's, round 0), found in
+	 * substep element_flat_serial (-1: none, or zones have moved vertices since). around_flat:
+	 * queries around flagged elements pass over pairs within one such patch (set while a
+	 * resting list's mending queries: plait_mesh_contacts_relist_around). */
 	int *element_flat;
+	long element_flat_serial;
+	bool around_flat;
 	uint8_t *element_around;
 	int (*members)[2]; /* (root, particle), sorted to walk zone by zone */
 } plait_mesh_contacts;

@@ -607,6 +607,7 @@ typedef struct around_query {
 	const plait_mesh_contacts *mc;
 	int element; /* global */
 	int first;   /* the queried object's first element */
+	int flat;    /* the flat patch the element lies in (mc->around_flat, its own object), or -1 */
 	plait_element_pair_visitor *visit;
 } around_query;
 
@@ -616,6 +617,9 @@ static void visit_around(int local, void *context)
 	int e = query->element, f = query->first + local;
 	if (f == e || (query->mc->element_around[f] && f < e)) {
 		return;
+	}
+	if (query->flat >= 0 && query->mc->element_flat[f] == query->flat) {
+		return; /* within a patch that cannot touch itself (mc->around_flat) */
 	}
 	query->visit(e < f ? e : f, e < f ? f : e, query->context);
 }
@@ -640,7 +644,8 @@ void plait_mesh_contacts_query_around_element(const plait_sim *sim, const plait_
 		 * (path_box_range): no allowance between objects. */
 		vec3 margin = with_allowance && !past_window(mc) && b != a ? mc->allowance[a * mc->object_count + b]
 		                                                           : v3(0.0f, 0.0f, 0.0f);
-		around_query query = {context, mc, e, ob->first, visit};
+		int flat = mc->around_flat && b == a ? mc->element_flat[e] : -1;
+		around_query query = {context, mc, e, ob->first, flat, visit};
 		plait_element_tree_query(&ob->tree, mc->lower + ob->first, mc->upper + ob->first, mc->lower[e],
 		                         mc->upper[e], margin, visit_around, &query);
 	}
@@ -709,6 +714,13 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		plait_mesh_contacts_rebound_cloth_edges(sim, mc);
 	}
 	int marked = plait_mesh_contacts_mark_elements(mc);
+	/* A gather passes over the pairs within a flat patch: so does the mending of a resting list
+	 * (past its window), within a patch the gather passed over that the last substep's failsafe
+	 * found still flat along that substep's paths (a guess, as the gather's is: this substep's
+	 * failsafe checks it along its own). Not within the window, where the cloth still moves:
+	 * there it changed the mesh arm's course into a squeeze the failsafe cannot undo
+	 * (performance.md, session 26). */
+	mc->around_flat = mc->element_flat_serial == mc->substep_serial - 1 && stop;
 	pair_pass pass = {.sim = sim,
 	                  .mc = mc,
 	                  .stage = STAGE_GATHER,
@@ -720,6 +732,7 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		object_pass objects = {&pass, 0, 0};
 		plait_mesh_contacts_query_around(sim, mc, true, plait_mesh_contacts_visit_object_elements, &objects);
 	}
+	mc->around_flat = false;
 	if (marked > 0) {
 		mc->mend_met_per_element = (float)pass.met / (float)marked;
 	}
