@@ -220,45 +220,73 @@ static vec3 carried_start(const plait_particles *p, const plait_collider *c, int
 	return plait_rigid_apply(&c->rigid_end, plait_rigid_apply_inverse(&c->rigid_start, p->x_prev[i]));
 }
 
-/* How far collider c presses vertex i at x deeper in than it was at the substep's start (0:
- * not), and the way out (world space). */
-static float pressed_depth(const plait_sim *sim, const plait_collider *c, int i, vec3 x, vec3 *way_out)
+/* How far collider c presses a point of vertex i's radius at x deeper in than it was at the
+ * substep's start, at `start` (0: not), and the way out (world space). */
+static float pressed_depth(const plait_sim *sim, const plait_collider *c, int i, vec3 x, vec3 start,
+                           vec3 *way_out)
 {
 	vec3 normal, unused;
 	float gap = collider_gap(sim, c, &c->rigid_end, i, x, &normal);
-	float allowed =
-	    plait_minf(collider_gap(sim, c, &c->rigid_start, i, sim->particles.x_prev[i], &unused), 0.0f);
+	float allowed = plait_minf(collider_gap(sim, c, &c->rigid_start, i, start, &unused), 0.0f);
 	*way_out = plait_rigid_rotate(&c->rigid_end, normal);
 	return gap < allowed ? allowed - gap : 0.0f;
 }
 
-/* Whether carrying zone members[first, last) with collider `carrier` presses a member into
- * another collider. */
-static bool carry_presses(const plait_sim *sim, const plait_collider *carrier, int (*members)[2], int first,
-                          int last)
+/* Whether vertex i is a zone member that can move, in the zone rooted at `root`. */
+static bool moving_member(const plait_sim *sim, const plait_mesh_contacts *mc, int i, int root)
+{
+	return sim->particles.point[i].w > 0.0f && mc->zone_parent[i] >= 0 &&
+	       zone_root(mc->zone_parent, i) == root;
+}
+
+/* How far collider c presses zone members[first, last) in at most (0: not), and the way out:
+ * at each moving member, and at the middle of each edge between two of them. A segment between
+ * two points outside a convex collider can still cut through it near an edge: the sleeve
+ * carried with one arm mesh kept a cloth edge across the other's edge that way (performance.md,
+ * session 26). */
+static float deepest_press(const plait_sim *sim, const plait_collider *c, int (*members)[2], int first,
+                           int last, vec3 *push)
 {
 	const plait_particles *p = &sim->particles;
-	for (int k = 0; k < sim->collider_count; ++k) {
-		const plait_collider *c = &sim->colliders[k];
-		if (c == carrier || !pressing_collider(c)) {
-			continue;
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	float deepest = 0.0f;
+	for (int m = first; m < last; ++m) {
+		int i = members[m][1];
+		vec3 way_out;
+		float depth =
+		    p->point[i].w > 0.0f ? pressed_depth(sim, c, i, p->point[i].x, p->x_prev[i], &way_out) : 0.0f;
+		if (depth > deepest) {
+			deepest = depth;
+			*push = way_out;
 		}
-		for (int m = first; m < last; ++m) {
-			int i = members[m][1];
+	}
+	int root = members[first][0];
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		int edges = el->size == 3 ? 3 : el->size - 1; /* a triangle's three, a segment's one */
+		for (int a = 0; a < edges; ++a) {
+			int i = el->v[a], j = el->v[a + 1 < el->size ? a + 1 : 0];
+			if (!moving_member(sim, mc, i, root) || !moving_member(sim, mc, j, root)) {
+				continue;
+			}
+			vec3 middle = v3_scale(v3_add(p->point[i].x, p->point[j].x), 0.5f);
+			vec3 start = v3_scale(v3_add(p->x_prev[i], p->x_prev[j]), 0.5f);
 			vec3 way_out;
-			if (pressed_depth(sim, c, i, carried_start(p, carrier, i), &way_out) > 0.0f) {
-				return true;
+			float depth = pressed_depth(sim, c, i, middle, start, &way_out);
+			if (depth > deepest) {
+				deepest = depth;
+				*push = way_out;
 			}
 		}
 	}
-	return false;
+	return deepest;
 }
 
 #define SLIDE_PASSES 8
 
 /* Translates zone members[first, last), as placed, out of every collider that presses them in
- * deeper than they began: by the deepest member's push, collider after collider, pass after
- * pass. */
+ * deeper than they began: by the deepest push (deepest_press), collider after collider, pass
+ * after pass. */
 static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
 {
 	plait_particles *p = &sim->particles;
@@ -269,17 +297,8 @@ static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
 			if (!pressing_collider(c)) {
 				continue;
 			}
-			float deepest = 0.0f;
 			vec3 push = v3(0.0f, 0.0f, 0.0f);
-			for (int m = first; m < last; ++m) {
-				int i = members[m][1];
-				vec3 way_out;
-				float depth = p->point[i].w > 0.0f ? pressed_depth(sim, c, i, p->point[i].x, &way_out) : 0.0f;
-				if (depth > deepest) {
-					deepest = depth;
-					push = way_out;
-				}
-			}
+			float deepest = deepest_press(sim, c, members, first, last, &push);
 			if (deepest > 0.0f) {
 				moved = true;
 				for (int m = first; m < last; ++m) {
@@ -355,15 +374,14 @@ static bool carry_back(plait_sim *sim, int (*members)[2], int first, int last, b
 	} else if (carry) {
 		c = collider_beside(sim, members, first, last);
 	}
-	bool presses = c != NULL && carry_presses(sim, c, members, first, last);
 	for (int k = first; k < last; ++k) {
 		int i = members[k][1];
 		if (p->point[i].w > 0.0f) {
 			p->point[i].x = c != NULL ? carried_start(p, c, i) : p->x_prev[i];
 		}
 	}
-	if (presses) {
-		slide_out(sim, members, first, last);
+	if (c != NULL) {
+		slide_out(sim, members, first, last); /* nothing moves unless something presses */
 	}
 	return c != NULL;
 }
