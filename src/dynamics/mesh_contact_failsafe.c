@@ -349,6 +349,31 @@ static const plait_collider *collider_within(const plait_sim *sim, int (*members
 	return moving;
 }
 
+/* Whether every pinned member of zone members[first, last) is a vertex of a rigid collider
+ * that does not move this substep. */
+static bool pins_only_of_still_colliders(const plait_sim *sim, int (*members)[2], int first, int last)
+{
+	const plait_particles *p = &sim->particles;
+	for (int m = first; m < last; ++m) {
+		int i = members[m][1];
+		if (p->point[i].w != 0.0f) {
+			continue;
+		}
+		const plait_collider *found = NULL;
+		for (int k = 0; k < sim->collider_count && found == NULL; ++k) {
+			const plait_collider *c = &sim->colliders[k];
+			if (i >= c->first && i < c->first + c->count) {
+				found = c;
+			}
+		}
+		if (found == NULL || found->mesh_end != NULL ||
+		    memcmp(&found->rigid_start, &found->rigid_end, sizeof found->rigid_start) != 0) {
+			return false;
+		}
+	}
+	return true;
+}
+
 /* Zone members[first, last) still crossing after the zone rounds: back where the substep
  * began, which was free, but as seen from what they lay against. A zone beside a moving
  * collider goes where that collider carried its start: one left behind would end inside a
@@ -359,8 +384,9 @@ static const plait_collider *collider_within(const plait_sim *sim, int (*members
  * last round (`carry` false) puts such zones back at their start, which was free. A zone that
  * holds a moving collider's vertices (it crossed a mesh's or a box's edges or corners) is
  * carried with that collider in every round: those vertices have moved with it, and the start
- * was free as seen from it; one holding other pinned vertices stays where the substep began.
- * Returns whether the zone was carried. */
+ * was free as seen from it; one holding only still colliders' vertices is carried as a zone
+ * beside a moving collider is; one holding other pinned vertices stays where the substep
+ * began. Returns whether the zone was carried. */
 static bool carry_back(plait_sim *sim, int (*members)[2], int first, int last, bool carry)
 {
 	plait_particles *p = &sim->particles;
@@ -371,6 +397,12 @@ static bool carry_back(plait_sim *sim, int (*members)[2], int first, int last, b
 	const plait_collider *c = NULL;
 	if (pinned) {
 		c = collider_within(sim, members, first, last);
+		/* Holding only a still collider's vertices (cloth across the upper bar's edge), it is
+		 * carried with a moving collider beside it as any zone is, and slides off the still
+		 * one: put back where it began, the forearm turning over it left it inside. */
+		if (c == NULL && carry && pins_only_of_still_colliders(sim, members, first, last)) {
+			c = collider_beside(sim, members, first, last);
+		}
 	} else if (carry) {
 		c = collider_beside(sim, members, first, last);
 	}
