@@ -159,6 +159,12 @@ static void rigidify(plait_particles *p, int (*members)[2], int first, int last)
 	}
 }
 
+/* Whether collider c does not move this substep. */
+static bool collider_still(const plait_collider *c)
+{
+	return memcmp(&c->rigid_start, &c->rigid_end, sizeof c->rigid_start) == 0;
+}
+
 /* Colliders a zone can be carried by: the shapes with a rigid motion and a bounded body. */
 static bool carrying_collider(const plait_collider *c)
 {
@@ -198,7 +204,7 @@ static const plait_collider *collider_beside(const plait_sim *sim, int (*members
 	float nearest_gap = INFINITY;
 	for (int k = 0; k < sim->collider_count; ++k) {
 		const plait_collider *c = &sim->colliders[k];
-		if (!carrying_collider(c) || memcmp(&c->rigid_start, &c->rigid_end, sizeof c->rigid_start) == 0) {
+		if (!carrying_collider(c) || collider_still(c)) {
 			continue;
 		}
 		for (int m = first; m < last; ++m) {
@@ -315,10 +321,22 @@ static void slide_out(plait_sim *sim, int (*members)[2], int first, int last)
 	}
 }
 
-/* The collider a zone holding collider vertices (pinned particles: a mesh's or a box's) is
- * carried by: the one moving collider among those whose vertices zone members[first, last)
- * holds; NULL when none moves, when a pinned member is no rigid collider's vertex (a cloth's
- * pin, a deforming mesh's) or when two of its colliders move. */
+/* The rigid collider particle i is a vertex of (pinned particles: a mesh's or a box's), or NULL
+ * (a cloth's pin, a deforming mesh's vertex). */
+static const plait_collider *rigid_collider_of(const plait_sim *sim, int i)
+{
+	for (int k = 0; k < sim->collider_count; ++k) {
+		const plait_collider *c = &sim->colliders[k];
+		if (i >= c->first && i < c->first + c->count) {
+			return c->mesh_end == NULL ? c : NULL;
+		}
+	}
+	return NULL;
+}
+
+/* The collider a zone holding collider vertices is carried by: the one moving collider among
+ * those whose vertices zone members[first, last) holds; NULL when none moves, when a pinned
+ * member is no rigid collider's vertex or when two of its colliders move. */
 static const plait_collider *collider_within(const plait_sim *sim, int (*members)[2], int first, int last)
 {
 	const plait_particles *p = &sim->particles;
@@ -328,17 +346,11 @@ static const plait_collider *collider_within(const plait_sim *sim, int (*members
 		if (p->point[i].w != 0.0f) {
 			continue;
 		}
-		const plait_collider *found = NULL;
-		for (int k = 0; k < sim->collider_count && found == NULL; ++k) {
-			const plait_collider *c = &sim->colliders[k];
-			if (i >= c->first && i < c->first + c->count) {
-				found = c;
-			}
-		}
-		if (found == NULL || found->mesh_end != NULL) {
+		const plait_collider *found = rigid_collider_of(sim, i);
+		if (found == NULL) {
 			return NULL;
 		}
-		if (memcmp(&found->rigid_start, &found->rigid_end, sizeof found->rigid_start) == 0) {
+		if (collider_still(found)) {
 			continue;
 		}
 		if (moving != NULL && moving != found) {
@@ -359,15 +371,8 @@ static bool pins_only_of_still_colliders(const plait_sim *sim, int (*members)[2]
 		if (p->point[i].w != 0.0f) {
 			continue;
 		}
-		const plait_collider *found = NULL;
-		for (int k = 0; k < sim->collider_count && found == NULL; ++k) {
-			const plait_collider *c = &sim->colliders[k];
-			if (i >= c->first && i < c->first + c->count) {
-				found = c;
-			}
-		}
-		if (found == NULL || found->mesh_end != NULL ||
-		    memcmp(&found->rigid_start, &found->rigid_end, sizeof found->rigid_start) != 0) {
+		const plait_collider *found = rigid_collider_of(sim, i);
+		if (found == NULL || !collider_still(found)) {
 			return false;
 		}
 	}
