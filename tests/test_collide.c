@@ -2089,3 +2089,56 @@ Test(collide, a_rest_pair_crossing_beside_a_passed_over_patch_is_swept)
 	free(tri);
 	plait_destroy_world(world);
 }
+
+/* Places particles v[0..3] of a drape scene's sim as a vertex 4 mm below a triangle (1 m = 1),
+ * still over the substep, off every collider, with inverse masses w, and projects the
+ * vertex-face pair between them at a contact distance of 1 cm; returns the particles' moves. */
+static void project_vertex_under_triangle(const float w[4], vec3 moved[4])
+{
+	collide_scene scene;
+	plait_error error;
+	collide_scene_options options = collide_scene_default_options();
+	cr_assert(collide_scene_create_with(&scene, SCENE_DRAPE, 4, NULL, &options, &error), "%s", error.message);
+	plait_sim *sim = &scene.world.world->sim;
+	plait_particles *p = &sim->particles;
+	/* The triangle's corner 0 weighs 0.1 at the point under the vertex, corners 1 and 2 0.45. */
+	const vec3 at[4] = {
+	    {0.045f, -0.004f, 0.045f}, {0.0f, 0.0f, 0.0f}, {0.1f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.1f}};
+	contact_pair pair = {
+	    .v = {0, 1, 2, 3}, .type = PAIR_VERTEX_FACE, .distance = 0.01f, .side = 1.0f, .scale = {1.0f, 1.0f}};
+	for (int k = 0; k < 4; ++k) {
+		int i = pair.v[k];
+		p->point[i].x = at[k];
+		p->point[i].w = w[k];
+		p->x_prev[i] = at[k];
+		p->flags[i] &= (uint8_t) ~(PLAIT_PARTICLE_SUPPORTED | PLAIT_PARTICLE_CONTACT);
+	}
+	int ccd_hits = 0;
+	(void)plait_mesh_contacts_project_pair(sim, &pair, &ccd_hits);
+	for (int k = 0; k < 4; ++k) {
+		moved[k] = v3_sub(p->point[pair.v[k]].x, at[k]);
+	}
+	collide_scene_destroy(&scene);
+}
+
+/* A contact never throws a vertex farther than the gap it closes. With the vertex and two of
+ * the triangle's corners held, closing the 6 mm gap at once would move the free corner, which
+ * weighs 0.1 there, by 6 cm: one corner thrown so, over the box arm's forearm, left its
+ * triangles wrapped through the bar (mesh_contact.c, respond). The pair closes as far as that
+ * bound allows, and a pair whose vertices all give way still closes in one projection. */
+Test(collide, a_contact_moves_no_vertex_farther_than_its_gap)
+{
+	vec3 moved[4];
+	const float held[4] = {0.0f, 1.0f, 0.0f, 0.0f};
+	project_vertex_under_triangle(held, moved);
+	cr_expect_float_eq(moved[1].x, 0.0f, 1e-7f);
+	cr_expect_float_eq(moved[1].z, 0.0f, 1e-7f);
+	cr_expect(moved[1].y > 0.0059f && moved[1].y < 0.0061f,
+	          "the free corner moved %g m away from the vertex, for a 0.006 m gap", (double)moved[1].y);
+	const float all_free[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+	project_vertex_under_triangle(all_free, moved);
+	/* The gap, 0.01 - 0.004 m, shared by the vertex (down) and the triangle's corners (up). */
+	float triangle_up = 0.1f * moved[1].y + 0.45f * moved[2].y + 0.45f * moved[3].y;
+	cr_expect_float_eq(triangle_up - moved[0].y, 0.006f, 1e-6f, "the pair opened by %g m",
+	                   (double)(triangle_up - moved[0].y));
+}

@@ -152,7 +152,18 @@ static bool respond(plait_sim *sim, const contact_pair *pair, const float *g, ve
 		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
 		move = v3_mul_add(move, -removed, tangential);
 	}
-	vec3 step = v3_scale(move, 1.0f / denominator);
+	/* No vertex moves farther than the gap the pair closes: where the vertices that give way
+	 * weigh little in it (one corner of a triangle whose other corners rest on a collider, its
+	 * barycentric weight 0.07), closing it all would throw that corner across the cloth. One
+	 * was thrown 7 cm, over the box arm's forearm, and its triangles ended wrapped through the
+	 * bar (performance.md, session 27). The pair closes in later iterations, or the failsafe
+	 * sees to it. */
+	float largest_lever = 0.0f;
+	for (int k = 0; k < count; ++k) {
+		largest_lever = plait_maxf(largest_lever, fabsf(w[k] * g[k]));
+	}
+	float reach = largest_lever / denominator;
+	vec3 step = v3_scale(move, reach > 1.0f ? 1.0f / (denominator * reach) : 1.0f / denominator);
 	/* Only vertices that give way are written: one that never moves (inverse mass 0) may be
 	 * read by pairs projected side by side (mesh_contact_plan.c). */
 	for (int k = 0; k < count; ++k) {
