@@ -308,6 +308,32 @@ Test(physics, head_on_collision_conserves_momentum_and_bounces_as_asked)
 	cr_assert_float_eq(v2, -0.25, 0.0025, "v2 = %g", v2);
 }
 
+/* A particle within the thickness beside a box's side face, driven 10 cm into the box within one
+ * substep, ends nearer the top face than the side it came by: it goes back out of the side it
+ * began by, not over the edge onto the top (a box's nearest face jumps: contact.c,
+ * collide_particle). Out of the top, a cloth vertex in the box arm's elbow ended across the
+ * forearm from the rest of its cloth, its triangles wrapped through the bar. */
+Test(physics, a_particle_driven_deep_into_a_box_goes_back_out_of_the_face_it_came_by)
+{
+	plait_world_id world = make_world(4, 60.0f);
+	plait_collider_def box = plait_default_collider_def();
+	box.shape = PLAIT_SHAPE_BOX;
+	box.size = (plait_vec3){1.0f, 0.04f, 1.0f};
+	plait_error error;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &box, &error)), "%s", error.message);
+	const float radius = 0.005f;
+	/* 24 m/s is 10 cm in a substep of 1/240 s. */
+	plait_object_id particle = add_particle(world, (plait_vec3){-0.5f - 0.98f * radius, 0.015f, 0.0f},
+	                                        (plait_vec3){24.0f, 0.0f, 0.0f}, 1.0f, radius);
+	cr_assert(test_step_frames(world, 1));
+	plait_vec3 x;
+	cr_assert_eq(plait_object_get_positions(particle, 0, 1, &x, NULL), PLAIT_OK);
+	cr_expect_lt(x.x, -0.5f, "the particle is at x = %g m, y = %g m: not back beside the side face",
+	             (double)x.x, (double)x.y);
+	cr_expect_lt(x.y, 0.02f, "the particle went over the edge onto the top, to y = %g m", (double)x.y);
+	plait_destroy_world(world);
+}
+
 /* A particle resting against the underside of a 1 mm box, a rounding inside the thickness, shot
  * up through it within one substep: it began outside the box itself, so it stays on the side
  * it began on (the trapped rule pushes a particle out along the normal where it ends, which

@@ -658,10 +658,15 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 		 * the normal at the end position instead, which for the convex shapes here leads
 		 * straight out. Only within the thickness (resting on it, a rounding inside): out the
 		 * way it came, unless the end lies past the shape on another side (through a thin box),
-		 * when it goes back to the side it began on. */
+		 * when it goes back to the side it began on. A box's nearest face jumps: an end inside
+		 * the box itself goes back out of the face it began by, not out of the face nearest the
+		 * end. (A vertex that the failsafe's zones swung 6 cm into the box arm's forearm from
+		 * beside one face went out through the next, across the bar from the rest of its
+		 * cloth, and its triangles ended wrapped through the bar: performance.md, session 27.) */
 		vec3 end_normal;
 		float end_distance = plait_shape_distance(&c->shape, p1, &end_normal);
-		if (!(distance > 0.0f) || v3_dot(end_normal, normal) >= 0.0f) {
+		bool back_out_of_its_face = c->shape.type == PLAIT_SHAPE_BOX && end_distance < 0.0f;
+		if (!(distance > 0.0f) || (v3_dot(end_normal, normal) >= 0.0f && !back_out_of_its_face)) {
 			distance = end_distance;
 			normal = end_normal;
 			hit = p1;
