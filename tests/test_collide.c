@@ -535,7 +535,8 @@ Test(collide, cloth_put_back_by_the_failsafe_moves_with_the_collider_it_lay_on)
 /* The same sleeve over the arm given as two closed capsule meshes (912 triangles each), the
  * forearm's mesh turned by its keyframed transform: cloth meets a mesh collider's faces, edges
  * and corners in the mesh contacts, continuously, and zones that cross one take in its
- * vertices. Clean from 63 of 64 nearby starts at n = 14 and 16 (performance.md, session 26). */
+ * vertices. Clean from 64 of 64 nearby starts at n = 14 and 16 (performance.md, sessions 26
+ * and 27). */
 Test(collide, a_tube_over_a_bending_mesh_arm_never_crosses_itself_or_the_arm)
 {
 	collide_scene_options options = collide_scene_default_options();
@@ -585,24 +586,29 @@ Test(collide, cloth_put_back_with_a_bars_vertices_moves_with_the_bar)
 }
 
 /* A zone carried with one collider slides out of any other it is pressed into, measured at its
- * vertices and at the middles of its edges: a cloth edge between two points outside a convex
- * collider can still cut through it near an edge (mesh_contact_failsafe.c, deepest_press).
- * From these starts, with vertices alone, the sleeve ended with 4 triangle pairs through the
- * upper arm's mesh (n = 16, variant 27) and 4 through a box bar (n = 16, variant 9) from the
- * bend on. */
+ * vertices and along its edges: a cloth edge between two points outside a convex collider can
+ * still cut through it near an edge (mesh_contact_failsafe.c, deepest_press). From these
+ * starts, with vertices alone, the sleeve ended with 4 triangle pairs through the upper arm's
+ * mesh (n = 16, variant 27) and 4 through a box bar (n = 16, variant 9) from the bend on; with
+ * the edges' middles too, 12 and 2 through the forearm's bar (n = 14, variant 28, and n = 16,
+ * variant 23) for more than 120 frames. */
 Test(collide, a_cloth_edge_cutting_through_a_colliders_edge_slides_out_too)
 {
-	collide_scene_options mesh_arm = collide_scene_default_options(), box_arm = mesh_arm;
-	mesh_arm.mesh_colliders = true;
-	mesh_arm.variant = 27;
-	box_arm.box_colliders = true;
-	box_arm.variant = 9;
-	collide_scene_options *starts[2] = {&mesh_arm, &box_arm};
-	const char *names[2] = {"mesh arm at 16, variant 27", "box arm at 16, variant 9"};
-	for (int k = 0; k < 2; ++k) {
+	struct {
+		bool mesh;
+		int n, variant;
+	} starts[4] = {{true, 16, 27}, {false, 16, 9}, {false, 14, 28}, {false, 16, 23}};
+	for (int k = 0; k < 4; ++k) {
+		collide_scene_options options = collide_scene_default_options();
+		options.mesh_colliders = starts[k].mesh;
+		options.box_colliders = !starts[k].mesh;
+		options.variant = starts[k].variant;
 		collide_scene scene;
-		scene_totals t = run_scene_with(SCENE_ARM, 16, 0, starts[k], &scene);
-		expect_clean(&t, names[k]);
+		scene_totals t = run_scene_with(SCENE_ARM, starts[k].n, 0, &options, &scene);
+		char name[48];
+		snprintf(name, sizeof name, "%s arm at %d, variant %d", starts[k].mesh ? "mesh" : "box", starts[k].n,
+		         starts[k].variant);
+		expect_clean(&t, name);
 		collide_scene_destroy(&scene);
 	}
 }

@@ -245,11 +245,44 @@ static bool moving_member(const plait_sim *sim, const plait_mesh_contacts *mc, i
 	       zone_root(mc->zone_parent, i) == root;
 }
 
+#define EDGE_SEARCH_STEPS 24
+
+/* Where along vertex i's edge from a to b (t in [0, 1]) collider c at the substep's end comes
+ * deepest: a golden-section search for the least signed distance. That distance is convex along
+ * a line for a convex shape (sphere, capsule, box, plane), so the search finds its least to
+ * within 1e-5 of the edge; in a mesh, a local least. */
+static float deepest_along(const plait_sim *sim, const plait_collider *c, int i, vec3 a, vec3 b)
+{
+	const float golden = 0.618034f;
+	vec3 d = v3_sub(b, a), unused;
+	float lo = 0.0f, hi = 1.0f;
+	float t1 = hi - golden, t2 = lo + golden;
+	float g1 = collider_gap(sim, c, &c->rigid_end, i, v3_mul_add(a, t1, d), &unused);
+	float g2 = collider_gap(sim, c, &c->rigid_end, i, v3_mul_add(a, t2, d), &unused);
+	for (int step = 0; step < EDGE_SEARCH_STEPS; ++step) {
+		if (g1 < g2) {
+			hi = t2;
+			t2 = t1;
+			g2 = g1;
+			t1 = hi - golden * (hi - lo);
+			g1 = collider_gap(sim, c, &c->rigid_end, i, v3_mul_add(a, t1, d), &unused);
+		} else {
+			lo = t1;
+			t1 = t2;
+			g1 = g2;
+			t2 = lo + golden * (hi - lo);
+			g2 = collider_gap(sim, c, &c->rigid_end, i, v3_mul_add(a, t2, d), &unused);
+		}
+	}
+	return 0.5f * (lo + hi);
+}
+
 /* How far collider c presses zone members[first, last) in at most (0: not), and the way out:
- * at each moving member, and at the middle of each edge between two of them. A segment between
- * two points outside a convex collider can still cut through it near an edge: the sleeve
- * carried with one arm mesh kept a cloth edge across the other's edge that way (performance.md,
- * session 26). */
+ * at each moving member, and at the deepest point of each edge between two of them. A segment
+ * between two points outside a convex collider can still cut through it near an edge: the
+ * sleeve carried with one arm mesh kept a cloth edge across the other's edge that way, and
+ * over the box arm's bars, edges whose middles stayed outside a bar while a point nearer one
+ * end was in (performance.md, sessions 26 and 27). */
 static float deepest_press(const plait_sim *sim, const plait_collider *c, int (*members)[2], int first,
                            int last, vec3 *push)
 {
@@ -275,13 +308,18 @@ static float deepest_press(const plait_sim *sim, const plait_collider *c, int (*
 			if (!moving_member(sim, mc, i, root) || !moving_member(sim, mc, j, root)) {
 				continue;
 			}
-			vec3 middle = v3_scale(v3_add(p->point[i].x, p->point[j].x), 0.5f);
-			vec3 start = v3_scale(v3_add(p->x_prev[i], p->x_prev[j]), 0.5f);
-			vec3 way_out;
-			float depth = pressed_depth(sim, c, i, middle, start, &way_out);
-			if (depth > deepest) {
-				deepest = depth;
-				*push = way_out;
+			/* The middle, and the deepest point (which in a mesh may be only a local one). */
+			vec3 from = p->point[i].x, to = p->point[j].x;
+			float along[2] = {0.5f, deepest_along(sim, c, i, from, to)};
+			for (int k = 0; k < 2; ++k) {
+				vec3 at = v3_mul_add(from, along[k], v3_sub(to, from));
+				vec3 start = v3_mul_add(p->x_prev[i], along[k], v3_sub(p->x_prev[j], p->x_prev[i]));
+				vec3 way_out;
+				float depth = pressed_depth(sim, c, i, at, start, &way_out);
+				if (depth > deepest) {
+					deepest = depth;
+					*push = way_out;
+				}
 			}
 		}
 	}
