@@ -552,16 +552,18 @@ Test(collide, a_tube_over_a_bending_mesh_arm_never_crosses_itself_or_the_arm)
 
 /* In the bent elbow a zone holding the forearm mesh's vertices is carried with it, and can be
  * carried into the upper arm's mesh: it slides out of a closed rigid mesh it is pressed into
- * as out of a capsule (mesh_contact_failsafe.c, pressing_collider). From this start the sleeve
- * ended pinched through the upper arm's mesh from frame 118 on, 46 triangle pairs at worst. */
+ * as out of a capsule (mesh_contact_failsafe.c, pressing_collider). Without that, from this
+ * start the sleeve ends pinched through the upper arm's mesh for 133 frames, 56 triangle pairs
+ * and 4 vertices inside at worst. (Session 26's start, 23, no longer fails without it after
+ * session 27's fixes to the contacts.) */
 Test(collide, cloth_carried_into_an_arm_mesh_slides_out_of_it)
 {
 	collide_scene_options options = collide_scene_default_options();
 	options.mesh_colliders = true;
-	options.variant = 23;
+	options.variant = 24;
 	collide_scene scene;
 	scene_totals t = run_scene_with(SCENE_ARM, 14, 0, &options, &scene);
-	expect_clean(&t, "mesh arm at 14, variant 23");
+	expect_clean(&t, "mesh arm at 14, variant 24");
 	collide_scene_destroy(&scene);
 }
 
