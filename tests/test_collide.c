@@ -512,6 +512,21 @@ static void expect_clean_arm_carrying_zones(const collide_scene_options *options
 	collide_scene_destroy(&scene);
 }
 
+/* expect_clean_arm_carrying_zones for the box arm from each of `count` starts (n, variant). */
+typedef struct arm_start {
+	int n, variant;
+} arm_start;
+
+static void expect_clean_box_arm_carrying_zones(const arm_start *starts, int count)
+{
+	for (int k = 0; k < count; ++k) {
+		collide_scene_options options = collide_scene_default_options();
+		options.box_colliders = true;
+		options.variant = starts[k].variant;
+		expect_clean_arm_carrying_zones(&options, starts[k].n, "box arm");
+	}
+}
+
 /* The forearm turning over cloth the failsafe put back where its substep began would leave
  * it inside the forearm, and every later substep would push it out through the cloth above and
  * put it back again: zones beside a moving collider are put back where the collider carried
@@ -576,15 +591,8 @@ Test(collide, cloth_carried_into_an_arm_mesh_slides_out_of_it)
  * from 32 each after session 26, 1 and 1). */
 Test(collide, cloth_put_back_with_a_bars_vertices_moves_with_the_bar)
 {
-	struct {
-		int n, variant;
-	} starts[2] = {{14, 9}, {16, 10}};
-	for (int k = 0; k < 2; ++k) {
-		collide_scene_options options = collide_scene_default_options();
-		options.box_colliders = true;
-		options.variant = starts[k].variant;
-		expect_clean_arm_carrying_zones(&options, starts[k].n, "box arm");
-	}
+	const arm_start starts[2] = {{14, 9}, {16, 10}};
+	expect_clean_box_arm_carrying_zones(starts, 2);
 }
 
 /* A zone carried with one collider slides out of any other it is pressed into, measured at its
@@ -625,15 +633,8 @@ Test(collide, a_cloth_edge_cutting_through_a_colliders_edge_slides_out_too)
  * session 27's fixes to the contacts. */
 Test(collide, cloth_across_a_still_bars_edge_moves_with_the_turning_bar_beside_it)
 {
-	struct {
-		int n, variant;
-	} starts[2] = {{14, 20}, {16, 24}};
-	for (int k = 0; k < 2; ++k) {
-		collide_scene_options options = collide_scene_default_options();
-		options.box_colliders = true;
-		options.variant = starts[k].variant;
-		expect_clean_arm_carrying_zones(&options, starts[k].n, "box arm");
-	}
+	const arm_start starts[2] = {{14, 20}, {16, 24}};
+	expect_clean_box_arm_carrying_zones(starts, 2);
 }
 
 /* A scene's variant k starts every cloth shifted by k x (0.7, 0, 0.3) mm (bench_collide
