@@ -2036,6 +2036,95 @@ Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_fail
 	plait_destroy_world(world);
 }
 
+/* The next gather fits the cross patches, whether or not they paid at the last (a gather
+ * fits them only where they passed over enough pairs at the last that did, and tries again
+ * every so many). */
+static void force_cross(plait_mesh_contacts *mc)
+{
+	for (int k = 0; k < mc->object_count; ++k) {
+		mc->objects[k].cross_fitted = false;
+		mc->objects[k].cross_idle = 1000;
+	}
+}
+
+/* The same with a cross patch (dynamics/mesh_contact_cross.c): the objects' own patches left
+ * out, the gather passes over the flat sheet's pairs within the cross tree's flat patches
+ * only; they fold the same way, and the failsafe must find the cross patch no longer flat and
+ * sweep its pairs. */
+Test(collide, a_passed_over_cross_patch_that_folds_through_itself_is_swept_by_the_failsafe)
+{
+	plait_world_id world;
+	plait_object_id cloth;
+	plait_mesh_contacts *mc = fine_sheet(&world, 0.001f, &cloth);
+	plait_sim *sim = &world.world->sim;
+	plait_particles *p = &sim->particles;
+	for (int i = 0; i < p->count; ++i) {
+		p->point[i].x = p->x_prev[i] = p->x_start[i];
+	}
+	mc->cull_own = false;
+	force_cross(mc);
+	long culled_before, unflattened_before, culled, unflattened;
+	plait_mesh_contacts_flat_counts(sim, &culled_before, &unflattened_before);
+	plait_mesh_contacts_gather(sim, mc);
+	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
+	const collision_object *o = &mc->objects[0];
+	cr_assert(o->cross_fitted, "the gather fitted no cross patches");
+	cr_assert_gt(culled, culled_before, "the gather passed over no cross patch of a flat sheet");
+	for (int n = 0; n < o->tree.node_count; ++n) {
+		cr_assert_eq(o->culled[n], 0, "node %d of the sheet's own tree was passed over", n);
+	}
+	for (int i = 0; i < p->count; ++i) {
+		vec3 x = p->x_start[i];
+		if (x.x > 0.0f) {
+			p->point[i].x = v3(-x.x, 0.2f * x.z, x.z);
+		}
+		mc->guard[i] = 1.0f;
+	}
+	plait_intersection_report report;
+	plait_world_check_intersections(world, &report, NULL);
+	cr_assert_gt(report.triangle_pairs, 0, "the fold crosses nothing");
+	plait_mesh_contacts_failsafe(sim);
+	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
+	cr_expect_gt(unflattened, unflattened_before, "the failsafe swept no passed-over cross patch");
+	plait_world_check_intersections(world, &report, NULL);
+	cr_expect_eq(report.triangle_pairs, 0, "%d triangle pairs cross after the failsafe",
+	             report.triangle_pairs);
+	plait_destroy_world(world);
+}
+
+/* A cloth draped over a ball is smooth but curved: its own flat patches leave seams between
+ * them, pairs of neighbours on either side of a border, which a gather meets. Most of those lie
+ * within one flat patch of the cross tree, and a gather passes over them after meeting them
+ * (before their rest slots and distances). */
+Test(collide, cross_patches_pass_over_the_seams_of_a_draped_cloth)
+{
+	collide_scene_options options = collide_scene_default_options();
+	options.stiff = true;
+	collide_scene scene;
+	scene_totals t = run_scene_with(SCENE_HANG_SELF, 64, 45, &options, &scene);
+	expect_clean(&t, "draped hang");
+	plait_sim *sim = &scene.world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	long met[2], skipped = 0;
+	for (int cross = 1; cross >= 0; --cross) { /* the same state, with and without */
+		mc->cull_cross = cross;
+		force_cross(mc);
+		plait_mesh_contacts_gather(sim, mc);
+		met[cross] = mc->gather_met;
+		if (cross) {
+			cr_assert(mc->objects[0].cross_fitted || mc->objects[1].cross_fitted,
+			          "the gather fitted no cross patches: they did not pay");
+			skipped = mc->objects[0].cross_skipped + mc->objects[1].cross_skipped;
+		}
+	}
+	cr_expect_gt(skipped, 0, "the cross patches passed over nothing");
+	/* At 64 x 64 about a fifth of the pairs met (two thirds at 128 x 128). */
+	cr_expect_gt(8 * skipped, met[1], "the cross patches passed over %ld of %ld element pairs met", skipped,
+	             met[1]);
+	cr_expect_eq(met[1], met[0], "the same state met %ld and %ld element pairs", met[1], met[0]);
+	collide_scene_destroy(&scene);
+}
+
 /* Rest pairs (closer than their contact distance in the start shape) are in no list: the
  * failsafe sweeps them, and passes over those within a patch that the gather passed over and
  * that kept flat along the substep. A sheet whose edges (6.25 mm) are shorter than its contact

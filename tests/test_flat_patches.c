@@ -100,7 +100,7 @@ static bool root_flat(patch_mesh *m, const vec3 *from, const vec3 *to, float gua
 		motion[i] = v3_sub(to[i], from[i]);
 		guards[i] = guard;
 	}
-	plait_patch_paths paths = {to, motion, guards, 1.0f, 0.0f};
+	plait_patch_paths paths = {to, motion, guards, 1.0f, 0.0f, NULL};
 	plait_flat_patches_fit(&m->patches, &m->tree, &paths);
 	bool flat = plait_flat_patches_flat(&m->patches, 0, &paths, NULL);
 	free(motion);
@@ -241,7 +241,7 @@ Test(flat_patches, a_sheet_folded_over_itself_is_not_flat_but_its_halves_are)
 	cr_expect(!root_flat(&m, folded, folded, 1e-4f));
 	int flat = 0;
 	vec3 *motion = calloc((size_t)m.vertex_count, sizeof *motion);
-	plait_patch_paths paths = {folded, motion, NULL, 1.0f, 0.0f};
+	plait_patch_paths paths = {folded, motion, NULL, 1.0f, 0.0f, NULL};
 	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 	for (int n = 0; n < m.tree.node_count; ++n) {
 		flat += plait_flat_patches_flat(&m.patches, n, &paths, NULL);
@@ -268,7 +268,7 @@ Test(flat_patches, a_spiral_ramp_whose_normals_agree_is_not_flat)
 			/* Along +x turning about -y keeps the triangles facing up. */
 			ramp[i] = v3(radius * cosf(turn), 0.08f * along, -radius * sinf(turn));
 		}
-		plait_patch_paths paths = {ramp, still, NULL, 1.0f, 0.0f};
+		plait_patch_paths paths = {ramp, still, NULL, 1.0f, 0.0f, NULL};
 		plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 		cr_assert_lt(m.patches.patch_cone[0].angle, 0.3f, "the ramp's normals span %g radians",
 		             (double)m.patches.patch_cone[0].angle);
@@ -299,7 +299,7 @@ Test(flat_patches, a_fan_going_twice_round_its_centre_is_not_flat)
 	}
 	build(&m);
 	vec3 *still = calloc((size_t)m.vertex_count, sizeof *still);
-	plait_patch_paths paths = {m.x, still, NULL, 1.0f, 0.0f};
+	plait_patch_paths paths = {m.x, still, NULL, 1.0f, 0.0f, NULL};
 	plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 	cr_assert_gt(m.patches.contour_first[1], m.patches.contour_first[0], "the fan is a disk");
 	cr_assert_lt(m.patches.patch_cone[0].angle, 0.3f);
@@ -381,7 +381,7 @@ Test(flat_patches, fitting_by_subtrees_gives_the_whole_trees_cones_and_boxes)
 		m.x[i].y = 0.05f * sinf(9.0f * x.x) * cosf(7.0f * x.z);
 		motion[i] = v3(0.002f * sinf(31.0f * x.z), 0.003f * cosf(17.0f * x.x), 0.001f);
 	}
-	plait_patch_paths paths = {m.x, motion, NULL, 1.0f, 1.0f};
+	plait_patch_paths paths = {m.x, motion, NULL, 1.0f, 1.0f, NULL};
 	int nodes = m.tree.node_count;
 	vec3 *lower = malloc(sizeof *lower * (size_t)m.triangle_count);
 	vec3 *upper = malloc(sizeof *upper * (size_t)m.triangle_count);
@@ -494,7 +494,7 @@ Test(flat_patches, leaf_cones_without_guards_are_the_definitions)
 			m.x[i].y = 0.08f * sinf(11.0f * x.x) * cosf(5.0f * x.z);
 			motion[i] = v3(0.004f * sinf(23.0f * x.z), 0.006f * cosf(13.0f * x.x), -0.002f);
 		}
-		plait_patch_paths paths = {m.x, motion, NULL, 1.0f, 2.0f};
+		plait_patch_paths paths = {m.x, motion, NULL, 1.0f, 2.0f, NULL};
 		plait_flat_patches_fit(&m.patches, &m.tree, &paths);
 		int full = 0;
 		for (int node = 0; node < m.tree.node_count; ++node) {
@@ -519,6 +519,70 @@ Test(flat_patches, leaf_cones_without_guards_are_the_definitions)
 	}
 }
 
+/* Two trees over one cloth (an object's own and its cross patches, dynamics/mesh_contact_cross.c)
+ * fit their cones from triangle normals found once (plait_flat_patches_normals): the same cones
+ * to the bit as finding them in the fit, on paths without guards (the gather's, four lanes) and
+ * with them, and for a tree with other leaves than the one the normals were found with. */
+Test(flat_patches, cones_from_shared_normals_are_the_fits_own)
+{
+	patch_mesh m = grid(23, 19);
+	vec3 *motion = malloc(sizeof *motion * (size_t)m.vertex_count);
+	float *guards = malloc(sizeof *guards * (size_t)m.vertex_count);
+	for (int i = 0; i < m.vertex_count; ++i) {
+		vec3 x = m.x[i];
+		m.x[i].y = 0.06f * sinf(10.0f * x.x) * cosf(6.0f * x.z);
+		motion[i] = v3(0.003f * sinf(19.0f * x.z), 0.005f * cosf(11.0f * x.x), 0.001f);
+		guards[i] = 0.0004f * (float)(i % 5);
+	}
+	/* A second tree over the same triangles, split along the diagonals. */
+	vec3 *centres = malloc(sizeof *centres * (size_t)m.triangle_count);
+	for (int t = 0; t < m.triangle_count; ++t) {
+		const int *v = m.triangles[t];
+		vec3 c = v3_scale(v3_add(m.x[v[0]], v3_add(m.x[v[1]], m.x[v[2]])), 1.0f / 3.0f);
+		centres[t] = v3(c.x - c.z, c.y, c.x + c.z);
+	}
+	plait_element_tree turned = {0};
+	plait_flat_patches turned_patches = {0};
+	cr_assert(plait_element_tree_build(&turned, &heap, centres, m.triangle_count));
+	cr_assert(plait_flat_patches_build(&turned_patches, &heap, &turned, (const int(*)[3])m.triangles,
+	                                   m.triangle_count, m.x));
+	plait_triangle_normals *normals = malloc(sizeof *normals * (size_t)m.triangle_count);
+	for (int guarded = 0; guarded < 2; ++guarded) {
+		plait_patch_paths paths = {m.x, motion, guarded ? guards : NULL, 1.0f, 1.0f, NULL};
+		/* In two ranges, the first not a multiple of four long (lanes, then the rest). */
+		plait_flat_patches_normals(&m.patches, &paths, 0, 37, normals);
+		plait_flat_patches_normals(&m.patches, &paths, 37, m.triangle_count, normals);
+		plait_patch_paths shared = paths;
+		shared.normals = normals;
+		const plait_flat_patches *fps[2] = {&m.patches, &turned_patches};
+		const plait_element_tree *trees[2] = {&m.tree, &turned};
+		for (int k = 0; k < 2; ++k) {
+			plait_flat_patches *fp = (plait_flat_patches *)fps[k];
+			size_t size = sizeof(plait_cone) * (size_t)fp->node_count;
+			plait_flat_patches_fit(fp, trees[k], &paths);
+			plait_cone *own = malloc(size);
+			memcpy(own, fp->patch_cone, size);
+			int narrow = 0;
+			for (int n = 0; n < fp->node_count; ++n) {
+				narrow += own[n].angle < 1.0f;
+			}
+			cr_assert_gt(narrow, 10, "tree %d: only %d narrow cones", k, narrow);
+			memset(fp->patch_cone, 0, size);
+			plait_flat_patches_fit(fp, trees[k], &shared);
+			cr_expect(memcmp(own, fp->patch_cone, size) == 0,
+			          "tree %d, guards %d: cones differ from shared normals", k, guarded);
+			free(own);
+		}
+	}
+	free(normals);
+	free(centres);
+	free(guards);
+	free(motion);
+	plait_flat_patches_destroy(&turned_patches, &heap);
+	plait_element_tree_destroy(&turned, &heap);
+	mesh_free(&m);
+}
+
 /* The failsafe's check of a patch the gather passed over (plait_flat_patches_keeps_flat): a
  * patch lifted whole keeps flat; one with a corner of any of its triangles pulled across the
  * opposite edge (which turns over that triangle, among others round the corner) does not,
@@ -529,14 +593,14 @@ Test(flat_patches, a_patch_keeps_flat_until_any_triangle_turns_over)
 	vec3 *still = calloc((size_t)m.vertex_count, sizeof *still);
 	vec3 *motion = malloc(sizeof *motion * (size_t)m.vertex_count);
 	vec3 *lift = malloc(sizeof *lift * (size_t)m.vertex_count);
-	plait_patch_paths rest = {m.x, still, NULL, 1.0f, 0.0f};
+	plait_patch_paths rest = {m.x, still, NULL, 1.0f, 0.0f, NULL};
 	plait_flat_patches_fit(&m.patches, &m.tree, &rest);
 	vec3 axis;
 	cr_assert(plait_flat_patches_flat(&m.patches, 0, &rest, &axis));
 	for (int i = 0; i < m.vertex_count; ++i) {
 		lift[i] = v3(0.001f, 0.003f, -0.002f);
 	}
-	plait_patch_paths lifted = {m.x, lift, NULL, 1.0f, 0.0f};
+	plait_patch_paths lifted = {m.x, lift, NULL, 1.0f, 0.0f, NULL};
 	int checked = 0;
 	for (int node = 0; node < m.tree.node_count; ++node) {
 		int begin = m.patches.node_begin[node], end = m.patches.node_end[node];
@@ -552,7 +616,7 @@ Test(flat_patches, a_patch_keeps_flat_until_any_triangle_turns_over)
 				motion[i] = v3(0.0f, 0.0f, 0.0f);
 			}
 			motion[v[0]] = v3_scale(across, -2.0f); /* the path starts beyond the edge */
-			plait_patch_paths turned = {m.x, motion, NULL, 1.0f, 0.0f};
+			plait_patch_paths turned = {m.x, motion, NULL, 1.0f, 0.0f, NULL};
 			cr_expect(!plait_flat_patches_keeps_flat(&m.patches, node, axis, &turned),
 			          "node %d keeps flat with triangle %d of [%d, %d) turned over", node, k, begin, end);
 			checked += 1;

@@ -518,13 +518,8 @@ static vec3 path_end(const plait_patch_paths *paths, int i)
 	return paths->motion != NULL ? v3_mul_add(paths->at[i], paths->on, paths->motion[i]) : paths->at[i];
 }
 
-/* A triangle's normal over the paths: with its vertices moving straight it is
- * n(s) = sum B_k(s) N_k (quadratic Bernstein basis), so inside the cone of N_0, N_1, N_2; the
- * guards add a vector of length at most rho to it. */
-typedef struct triangle_normals {
-	vec3 n[3];
-	float rho;
-} triangle_normals;
+/* A triangle's normal over the paths (plait_triangle_normals). */
+typedef plait_triangle_normals triangle_normals;
 
 static triangle_normals triangle_normals_of(const plait_patch_paths *paths, const int *v)
 {
@@ -638,11 +633,25 @@ static plait_cone triangles_cone4(const plait_patch_paths *paths, const int (*tr
 	if (count <= 0) {
 		return no_cone(); /* as triangles_cone: no normal to sum */
 	}
-	const int *v[4];
-	for (int k = 0; k < 4; ++k) {
-		v[k] = triangles[which[k < count ? k : 0]];
+	triangle_normals4 t;
+	if (paths->normals != NULL) {
+		const triangle_normals *c[4];
+		for (int k = 0; k < 4; ++k) {
+			c[k] = &paths->normals[which[k < count ? k : 0]];
+		}
+		for (int m = 0; m < 3; ++m) {
+			t.n[m] = (lanes3){_mm_setr_ps(c[0]->n[m].x, c[1]->n[m].x, c[2]->n[m].x, c[3]->n[m].x),
+			                  _mm_setr_ps(c[0]->n[m].y, c[1]->n[m].y, c[2]->n[m].y, c[3]->n[m].y),
+			                  _mm_setr_ps(c[0]->n[m].z, c[1]->n[m].z, c[2]->n[m].z, c[3]->n[m].z)};
+		}
+		t.rho = _mm_setr_ps(c[0]->rho, c[1]->rho, c[2]->rho, c[3]->rho);
+	} else {
+		const int *v[4];
+		for (int k = 0; k < 4; ++k) {
+			v[k] = triangles[which[k < count ? k : 0]];
+		}
+		t = triangle_normals4_of(paths, v);
 	}
-	triangle_normals4 t = triangle_normals4_of(paths, v);
 	lanes3 *n = t.n;
 	__m128 rho = t.rho;
 	/* The axis: the normals' sum, triangle by triangle in order, as triangles_cone adds it. */
@@ -706,7 +715,8 @@ static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*tri
 	}
 	vec3 sum = {0.0f, 0.0f, 0.0f};
 	for (int k = 0; k < count; ++k) {
-		t[k] = triangle_normals_of(paths, triangles[which[k]]);
+		t[k] = paths->normals != NULL ? paths->normals[which[k]]
+		                              : triangle_normals_of(paths, triangles[which[k]]);
 		sum = v3_add(sum, v3_add(t[k].n[0], v3_add(t[k].n[1], t[k].n[2])));
 	}
 	float length = v3_length(sum);
@@ -714,6 +724,33 @@ static plait_cone triangles_cone(const plait_patch_paths *paths, const int (*tri
 		return no_cone();
 	}
 	return cone_round(v3_scale(sum, 1.0f / length), t, count);
+}
+
+void plait_flat_patches_normals(const plait_flat_patches *fp, const plait_patch_paths *paths, int begin,
+                                int end, plait_triangle_normals *out)
+{
+	const int(*triangles)[3] = (const int(*)[3])fp->triangles;
+	int t = begin;
+#if defined(PLAIT_HAVE_LANES)
+	if (lanes_fit(paths)) {
+		for (; t + 4 <= end; t += 4) {
+			const int *v[4] = {triangles[t], triangles[t + 1], triangles[t + 2], triangles[t + 3]};
+			triangle_normals4 four = triangle_normals4_of(paths, v);
+			vec3 n[3][4];
+			for (int m = 0; m < 3; ++m) {
+				lanes3_store(four.n[m], n[m]);
+			}
+			_Alignas(16) float rho[4];
+			_mm_store_ps(rho, four.rho);
+			for (int k = 0; k < 4; ++k) {
+				out[t + k] = (triangle_normals){{n[0][k], n[1][k], n[2][k]}, rho[k]};
+			}
+		}
+	}
+#endif
+	for (; t < end; ++t) {
+		out[t] = triangle_normals_of(paths, triangles[t]);
+	}
 }
 
 static void fit_under(plait_flat_patches *fp, const plait_element_tree *tree, const plait_patch_paths *paths,

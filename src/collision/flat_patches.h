@@ -66,11 +66,23 @@ typedef struct plait_flat_patches {
 /* Where each vertex may be while a list serves: within guard[i] of the straight path from
  * at[i] - back motion[i] to at[i] + on motion[i] (all vertices at the same point of their paths
  * at any one time). guard NULL: on the paths; motion NULL: standing at `at`. */
+/* A triangle's normal over the paths: with its vertices moving straight it is
+ * n(s) = sum B_k(s) n[k] (quadratic Bernstein basis), so inside the cone of n[0], n[1], n[2];
+ * the guards and rounding add a vector of length at most rho to it. */
+typedef struct plait_triangle_normals {
+	vec3 n[3];
+	float rho;
+} plait_triangle_normals;
+
 typedef struct plait_patch_paths {
 	const vec3 *at;
 	const vec3 *motion;
 	const float *guard;
 	float back, on;
+	/* Per triangle (the patches' numbering), its normals over these paths when found already
+	 * (plait_flat_patches_normals), so that patches of two trees over one mesh share them; or
+	 * NULL. */
+	const plait_triangle_normals *normals;
 } plait_patch_paths;
 
 /* Builds the patches of `tree`'s nodes over its triangles (particle indices, the tree's element
@@ -80,6 +92,11 @@ bool plait_flat_patches_build(plait_flat_patches *fp, const plait_allocator *all
                               const plait_element_tree *tree, const int (*triangles)[3], int triangle_count,
                               const vec3 *rest);
 void plait_flat_patches_destroy(plait_flat_patches *fp, const plait_allocator *allocator);
+
+/* The normals over the paths of triangles [begin, end) (the patches' numbering), into out[]:
+ * the same to the bit as the fits find them. Each triangle alone: ranges side by side. */
+void plait_flat_patches_normals(const plait_flat_patches *fp, const plait_patch_paths *paths, int begin,
+                                int end, plait_triangle_normals *out);
 
 /* Refits every node's normal cone over the paths: the leaves' from their triangles, the
  * parents' by merging their children's. The same in parts, for workers: each subtree under the

@@ -17,6 +17,8 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		sim->mesh_contacts = mc;
 		sim->mesh_contacts_dirty = true;
 		mc->cull_flat = true;
+		mc->cull_cross = true;
+		mc->cull_own = true;
 		mc->skip_smooth = true;
 		mc->plan_list = -1;
 		mc->plan_failed_list = -1;

@@ -31,6 +31,7 @@ void plait_mesh_contacts_free_elements(plait_mesh_contacts *mc, const plait_allo
 	for (int k = 0; k < mc->object_count; ++k) {
 		plait_element_tree_destroy(&mc->objects[k].tree, a);
 		plait_flat_patches_destroy(&mc->objects[k].patches, a);
+		plait_mesh_contacts_free_cross(&mc->objects[k], a);
 		plait_free(a, mc->objects[k].culled);
 		plait_free(a, mc->objects[k].culled_axis);
 		plait_free(a, mc->objects[k].node_floor);
@@ -89,6 +90,7 @@ static bool build_patches(plait_sim *sim, plait_mesh_contacts *mc, collision_obj
 	}
 	bool ok = plait_flat_patches_build(&o->patches, a, &o->tree, (const int(*)[3])triangles, o->count,
 	                                   sim->particles.x_start);
+	ok = ok && plait_mesh_contacts_build_cross(sim, o, (const int(*)[3])triangles);
 	plait_free(a, triangles);
 	if (ok && o->tree.node_count > 0) {
 		o->culled = plait_alloc_zero(a, (size_t)o->tree.node_count, sizeof(uint8_t));

@@ -755,7 +755,7 @@ static plait_patch_paths substep_paths(plait_sim *sim, plait_mesh_contacts *mc)
 		mc->sweep_end[i] = p->point[i].x;
 		mc->sweep_motion[i] = v3_sub(p->point[i].x, p->x_prev[i]);
 	}
-	return (plait_patch_paths){mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f};
+	return (plait_patch_paths){mc->sweep_end, mc->sweep_motion, NULL, 1.0f, 0.0f, NULL};
 }
 
 typedef struct check_job {
@@ -802,7 +802,8 @@ static bool check_passed_over(plait_sim *sim, plait_mesh_contacts *mc)
 			any = o->culled[n] != 0;
 		}
 	}
-	if (!any) {
+	bool cross = plait_mesh_contacts_any_cross(mc);
+	if (!any && !cross) {
 		return false;
 	}
 	for (int e = 0; e < mc->element_count; ++e) {
@@ -815,6 +816,9 @@ static bool check_passed_over(plait_sim *sim, plait_mesh_contacts *mc)
 			check_job job = {mc, o, &paths};
 			plait_parallel_for(&sim->parallel, check_nodes, &job, 0, o->tree.node_count, CHECK_GRAIN);
 		}
+	}
+	if (cross) {
+		plait_mesh_contacts_check_cross(sim, mc, &paths);
 	}
 	mc->element_flat_serial = mc->substep_serial;
 	return true;
@@ -844,6 +848,19 @@ static void sweep_unflattened(plait_sim *sim, plait_mesh_contacts *mc, pair_pass
 			                               v3(0.0f, 0.0f, 0.0f), NULL, node,
 			                               plait_mesh_contacts_visit_object_elements, &self);
 		}
+	}
+	bool cross = false;
+	for (int k = 0; k < mc->object_count && !cross; ++k) {
+		const collision_object *o = &mc->objects[k];
+		for (int n = 0; o->cross_of != NULL && n < o->cross_tree.node_count && !cross; ++n) {
+			cross = atomic_load_explicit(&o->cross_culled[n], memory_order_relaxed) == 2;
+		}
+	}
+	if (cross) {
+		if (!boxes) {
+			plait_mesh_contacts_fit_boxes(sim, mc, true, pass->failsafe_distance);
+		}
+		mc->unflattened += plait_mesh_contacts_sweep_cross(mc, pass);
 	}
 }
 

@@ -8,6 +8,7 @@
  *   mesh_contact_listing.c   element boxes, the traversal of objects, the gather and its guards
  *   mesh_contact_pieces.c    the traversals cut into pieces, listed on the workers
  *   mesh_contact_failsafe.c  the end-of-substep failsafe: sweeps and impact zones
+ *   mesh_contact_cross.c     cross patches: flat patches of a second tree, over the seams
  * A function one of them lends the others is named plait_mesh_contacts_ and what it was called
  * when they were one file; the rest stay static where they are used. */
 #ifndef PLAIT_DYNAMICS_MESH_CONTACT_INTERNAL_H
@@ -17,6 +18,8 @@
 #include "collision/flat_patches.h"
 #include "dynamics/mesh_contact.h"
 #include "topology/topology.h"
+
+#include <stdatomic.h>
 
 /* Primitive pairs. The first primitive's vertices come first in v[]. */
 typedef enum pair_type {
@@ -59,6 +62,21 @@ typedef struct collision_object {
 	plait_flat_patches patches;
 	uint8_t *culled; /* 1: passed over; 2: and found not flat along this substep's paths */
 	vec3 *culled_axis;
+	/* Its cross patches (mesh_contact_cross.c; cross_of NULL when it has none): a second tree
+	 * over the same elements and its flat patches; per element the largest cross patch found
+	 * flat at the last gather that holds it (-1: none, or none fitted); per cross node whether
+	 * a gather passed over pairs in it (as culled), and the direction it faced. Whether the
+	 * last gather fitted them, the element pairs they passed over then, and the gathers since
+	 * they were last fitted. */
+	plait_element_tree cross_tree;
+	plait_flat_patches cross;
+	int *cross_of;
+	_Atomic uint8_t *cross_culled;
+	vec3 *cross_axis;
+	bool cross_fitted;
+	long cross_skipped;
+	int cross_idle;
+	plait_triangle_normals *normals; /* scratch: its triangles' normals over the gather's paths */
 	/* Per tree node, for traversals between a filtered collider and a cloth or curve (see
 	 * plait_mesh_contacts_smooth_skip): the collider's least smooth reach of the corners and
 	 * edges its elements own under the node; the cloth's largest D (pair_reach) under it. NULL
@@ -146,6 +164,7 @@ typedef struct piece_list {
 	bool full;
 	int features_kept, features_left_out;
 	long met; /* element pairs it met */
+	long cross_skipped;
 } piece_list;
 
 /* A crossing found by a failsafe sweep on a worker, joined into its impact zone afterwards on
@@ -298,6 +317,9 @@ typedef struct plait_mesh_contacts {
 	long culled_patches;    /* patches the gathers passed over (a count) */
 	long unflattened;       /* of those, the ones the failsafe swept (a count) */
 	bool cull_flat;
+	/* Tests' switches (both on otherwise): whether gathers fit cross patches, and whether
+	 * traversals pass over the objects' own flat patches (cull_flat off: neither). */
+	bool cull_cross, cull_own;
 	bool skip_smooth; /* traversals pass over smooth node pairs (plait_mesh_contacts_smooth_skip) */
 	vec3 *sweep_end, *sweep_motion;
 	/* Per particle (scratch of fit_boxes): the box of its path relative to its object's mean
@@ -409,6 +431,7 @@ typedef struct pair_pass {
 	int overflow;
 	int features_kept, features_left_out; /* STAGE_GATHER: see plait_mesh_contacts */
 	long met;                             /* element pairs met (visit_elements) */
+	long cross_skipped;                   /* of those, passed over within a cross patch */
 	/* STAGE_FAILSAFE on a worker: crossings go here (room for HIT_ROOM; `full` past it) instead
 	 * of into the impact zones. */
 	sweep_hit *hits_out;
@@ -487,6 +510,37 @@ bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pa
 void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths,
                                      stage of);
 bool plait_mesh_contacts_skip_flat(int node, void *context);
+/* The skip of object o's pairs with itself in a traversal of `pass`'s stage (NULL: none), with
+ * *flat its context. */
+const plait_node_skip *plait_mesh_contacts_self_skip(const plait_mesh_contacts *mc, const collision_object *o,
+                                                     const pair_pass *pass, flat_skip *flat,
+                                                     plait_node_skip *skip);
+
+/* mesh_contact_cross.c */
+
+/* Builds object o's cross tree and patches from its triangles (particle indices, o's element
+ * numbering) in the rest shape; false when out of memory (o then has none). */
+bool plait_mesh_contacts_build_cross(plait_sim *sim, collision_object *o, const int (*triangles)[3]);
+void plait_mesh_contacts_free_cross(collision_object *o, const plait_allocator *allocator);
+/* Whether this gather should fit object o's cross patches (they passed over enough pairs at
+ * the last gather that did), and the count of the pairs they passed over at this one, into
+ * each object that fitted them (self pairs of one object at a time: the gather's whole count
+ * goes to the one object that has them, several share it by their triangles). */
+bool plait_mesh_contacts_cross_pays(collision_object *o);
+void plait_mesh_contacts_count_cross(plait_mesh_contacts *mc, long skipped);
+/* Fits object o's cross patches to the gather's paths, finds the largest flat ones (cross_of)
+ * and clears their marks; with `fit` false, leaves it none for this gather. */
+void plait_mesh_contacts_fit_cross(plait_sim *sim, collision_object *o, const plait_patch_paths *paths,
+                                   bool fit);
+/* Whether element pair (a, b) of o (o's numbering) lies in one flat cross patch of this gather:
+ * then the patch is marked as passed over. */
+bool plait_mesh_contacts_in_cross(collision_object *o, int a, int b);
+/* Whether any cross patch is marked; the marked ones checked along `paths` (the substep's),
+ * those that did not keep flat marked 2; their pairs with themselves swept (the elements'
+ * boxes fitted around the substep's paths), returning how many were. */
+bool plait_mesh_contacts_any_cross(const plait_mesh_contacts *mc);
+void plait_mesh_contacts_check_cross(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths);
+int plait_mesh_contacts_sweep_cross(plait_mesh_contacts *mc, pair_pass *pass);
 
 /* mesh_contact_features.c */
 

@@ -217,8 +217,8 @@ bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pa
 
 /* Normal cones are fitted the same way as boxes (CUT_LEVELS). */
 typedef struct fit_job {
-	plait_mesh_contacts *mc;
 	collision_object *object;
+	const plait_patch_paths *paths;
 	const int *roots;
 } fit_job;
 
@@ -226,10 +226,17 @@ static void fit_subtrees(void *context, int begin, int end)
 {
 	fit_job *job = context;
 	for (int k = begin; k < end; ++k) {
-		plait_flat_patches_fit_subtree(&job->object->patches, &job->object->tree, &job->mc->patch_paths,
-		                               job->roots[k]);
+		plait_flat_patches_fit_subtree(&job->object->patches, &job->object->tree, job->paths, job->roots[k]);
 	}
 }
+
+static void find_normals(void *context, int begin, int end)
+{
+	const fit_job *job = context;
+	plait_flat_patches_normals(&job->object->patches, job->paths, begin, end, job->object->normals);
+}
+
+#define NORMALS_GRAIN 4096
 
 void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths,
                                      stage of)
@@ -241,11 +248,24 @@ void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, co
 		if (o->patches.node_count == 0) {
 			continue;
 		}
+		/* At a gather, a cloth's cross patches are fitted to the same paths: its triangles'
+		 * normals are found once for both. */
+		bool cross =
+		    of == STAGE_GATHER && o->cross_of != NULL && mc->cull_cross && plait_mesh_contacts_cross_pays(o);
+		plait_patch_paths object_paths = *paths;
+		if (cross) {
+			fit_job normals = {o, paths, NULL};
+			plait_parallel_for(&sim->parallel, find_normals, &normals, 0, o->count, NORMALS_GRAIN);
+			object_paths.normals = o->normals;
+		}
 		int roots[1 << CUT_LEVELS];
 		int count = plait_element_tree_cut(&o->tree, CUT_LEVELS, roots);
-		fit_job job = {mc, o, roots};
+		fit_job job = {o, &object_paths, roots};
 		plait_parallel_for(&sim->parallel, fit_subtrees, &job, 0, count, 1);
 		plait_flat_patches_fit_above(&o->patches, &o->tree, CUT_LEVELS);
+		if (of == STAGE_GATHER && o->cross_of != NULL) {
+			plait_mesh_contacts_fit_cross(sim, o, &object_paths, cross);
+		}
 	}
 }
 
@@ -259,6 +279,20 @@ bool plait_mesh_contacts_skip_flat(int node, void *context)
 		flat->culled[node] = 1;
 		flat->culled_axis[node] = axis;
 	}
+	return skip;
+}
+
+const plait_node_skip *plait_mesh_contacts_self_skip(const plait_mesh_contacts *mc, const collision_object *o,
+                                                     const pair_pass *pass, flat_skip *flat,
+                                                     plait_node_skip *skip)
+{
+	if (!plait_mesh_contacts_culls_flat(mc, pass) || !mc->cull_own) {
+		return NULL;
+	}
+	bool gather = pass->stage == STAGE_GATHER;
+	*flat =
+	    (flat_skip){&o->patches, &mc->patch_paths, gather ? o->culled : NULL, gather ? o->culled_axis : NULL};
+	*skip = (plait_node_skip){plait_mesh_contacts_skip_flat, NULL, flat};
 	return skip;
 }
 
@@ -297,13 +331,11 @@ void plait_mesh_contacts_traverse_objects(plait_mesh_contacts *mc, pair_pass *pa
 		vec3 *la = mc->lower + oa->first, *ua = mc->upper + oa->first;
 		object_pass self = {pass, oa->first, oa->first};
 		if (oa->self) {
-			bool gather = pass->stage == STAGE_GATHER;
-			flat_skip flat = {&oa->patches, &mc->patch_paths, gather ? oa->culled : NULL,
-			                  gather ? oa->culled_axis : NULL};
-			plait_node_skip skip = {plait_mesh_contacts_skip_flat, NULL, &flat};
-			plait_element_tree_pairs_skipping(&oa->tree, la, ua,
-			                                  plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL,
-			                                  plait_mesh_contacts_visit_object_elements, &self);
+			flat_skip flat;
+			plait_node_skip skip;
+			plait_element_tree_pairs_skipping(
+			    &oa->tree, la, ua, plait_mesh_contacts_self_skip(mc, &mc->objects[a], pass, &flat, &skip),
+			    plait_mesh_contacts_visit_object_elements, &self);
 		}
 		for (int b = a + 1; b < mc->object_count; ++b) {
 			if (!plait_mesh_contacts_objects_meet(sim, mc, a, b)) {
@@ -430,7 +462,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	if (mc->cull_flat) {
 		/* The paths the list expects, without their guards: a guess, which the failsafe checks
 		 * along the substep's own paths (sweep_unflattened). */
-		plait_patch_paths paths = {mc->x_gather, mc->motion, NULL, 1.0f, (float)mc->list_serves};
+		plait_patch_paths paths = {mc->x_gather, mc->motion, NULL, 1.0f, (float)mc->list_serves, NULL};
 		plait_mesh_contacts_fit_patches(sim, mc, &paths, STAGE_GATHER);
 		for (int k = 0; k < mc->object_count; ++k) {
 			if (mc->objects[k].culled != NULL) {
@@ -449,10 +481,15 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	mc->last_listed = mc->pair_count;
 	mc->gather_met = pass.met;
+	plait_mesh_contacts_count_cross(mc, pass.cross_skipped);
 	mc->listing_met += pass.met;
 	for (int k = 0; k < mc->object_count; ++k) {
-		for (int n = 0; mc->objects[k].culled != NULL && n < mc->objects[k].tree.node_count; ++n) {
-			mc->culled_patches += mc->objects[k].culled[n];
+		const collision_object *o = &mc->objects[k];
+		for (int n = 0; o->culled != NULL && n < o->tree.node_count; ++n) {
+			mc->culled_patches += o->culled[n];
+		}
+		for (int n = 0; o->cross_of != NULL && n < o->cross_tree.node_count; ++n) {
+			mc->culled_patches += atomic_load_explicit(&o->cross_culled[n], memory_order_relaxed) != 0;
 		}
 	}
 	mc->features_kept = pass.features_kept;

@@ -683,6 +683,14 @@ static void visit_elements(int a, int b, void *context)
 	const plait_material *ma = &pass->sim->materials[ea->material];
 	const plait_material *mb = &pass->sim->materials[eb->material];
 	bool self = ma->object == mb->object;
+	if (self && pass->stage == STAGE_GATHER && plait_mesh_contacts_culls_flat(mc, pass)) {
+		/* Within one flat cross patch (mesh_contact_cross.c): passed over, as a flat node's. */
+		collision_object *o = &pass->mc->objects[mc->object_of[ea->v[0]]];
+		if (o->cross_fitted && plait_mesh_contacts_in_cross(o, a - o->first, b - o->first)) {
+			pass->cross_skipped += 1;
+			return;
+		}
+	}
 	uint32_t slots = self ? rest_slots(mc, a, b) : 0u;
 	if (slots == ALL_REST_SLOTS) {
 		return;

@@ -69,17 +69,15 @@ void plait_mesh_contacts_list_piece(plait_mesh_contacts *mc, pair_pass *pass, co
 	const collision_object *oa = &mc->objects[piece->a], *ob = &mc->objects[piece->b];
 	bool self = piece->a == piece->b;
 	object_pass o = {pass, oa->first, ob->first};
-	bool gather = pass->stage == STAGE_GATHER;
-	flat_skip flat = {&oa->patches, &mc->patch_paths, gather ? oa->culled : NULL,
-	                  gather ? oa->culled_axis : NULL};
-	plait_node_skip skip = {plait_mesh_contacts_skip_flat, NULL, &flat};
+	flat_skip flat;
+	plait_node_skip skip;
 	smooth_skip floors;
 	plait_node_skip smooth;
 	plait_element_tree_piece_pairs(
 	    &oa->tree, mc->lower + oa->first, mc->upper + oa->first, &ob->tree, mc->lower + ob->first,
 	    mc->upper + ob->first, self,
 	    self ? v3(0.0f, 0.0f, 0.0f) : plait_mesh_contacts_listing_margin(mc, pass, piece->a, piece->b),
-	    self ? (plait_mesh_contacts_culls_flat(mc, pass) ? &skip : NULL)
+	    self ? plait_mesh_contacts_self_skip(mc, &mc->objects[piece->a], pass, &flat, &skip)
 	         : plait_mesh_contacts_smooth_skip(mc, piece->a, piece->b, &floors, &smooth),
 	    piece->node, plait_mesh_contacts_visit_object_elements, &o);
 }
@@ -159,6 +157,7 @@ static void list_part_range(void *context, int begin, int end)
 		list->features_kept = pass.features_kept;
 		list->features_left_out = pass.features_left_out;
 		list->met = pass.met;
+		list->cross_skipped = pass.cross_skipped;
 	}
 }
 
@@ -225,10 +224,12 @@ static bool list_parts(parts_job *job, int count, pair_pass *out)
 			list->features_kept = again.features_kept;
 			list->features_left_out = again.features_left_out;
 			list->met = again.met;
+			list->cross_skipped = again.cross_skipped;
 		}
 		out->features_kept += list->features_kept;
 		out->features_left_out += list->features_left_out;
 		out->met += list->met;
+		out->cross_skipped += list->cross_skipped;
 		list->offset = total;
 		total += list->count;
 	}
@@ -261,15 +262,14 @@ bool plait_mesh_contacts_cut_pieces(const plait_sim *sim, plait_mesh_contacts *m
 				continue;
 			}
 			pair_pass margin_pass = {.stage = of};
-			flat_skip flat = {&oa->patches, &mc->patch_paths, of == STAGE_GATHER ? oa->culled : NULL,
-			                  of == STAGE_GATHER ? oa->culled_axis : NULL};
-			plait_node_skip skip = {plait_mesh_contacts_skip_flat, NULL, &flat};
+			flat_skip flat;
+			plait_node_skip skip;
 			smooth_skip floors;
 			plait_node_skip smooth;
 			int n = plait_element_tree_split(
 			    &oa->tree, &ob->tree, a == b,
 			    a == b ? v3(0.0f, 0.0f, 0.0f) : plait_mesh_contacts_listing_margin(mc, &margin_pass, a, b),
-			    a == b ? (plait_mesh_contacts_culls_flat(mc, &margin_pass) ? &skip : NULL)
+			    a == b ? plait_mesh_contacts_self_skip(mc, &mc->objects[a], &margin_pass, &flat, &skip)
 			           : plait_mesh_contacts_smooth_skip(mc, a, b, &floors, &smooth),
 			    PIECE_DEPTH, nodes, MAX_PIECES - count);
 			fits = n >= 0;
