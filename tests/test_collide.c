@@ -1994,13 +1994,25 @@ Test(collide, a_self_colliding_rope_does_not_pass_through_itself)
 	plait_destroy_world(world);
 }
 
+/* The next gather fits the cross patches, whether or not they paid at the last (a gather
+ * fits them only where they passed over enough pairs at the last that did, and tries again
+ * every so many). */
+static void force_cross(plait_mesh_contacts *mc)
+{
+	for (int k = 0; k < mc->object_count; ++k) {
+		mc->objects[k].cross_fitted = false;
+		mc->objects[k].cross_idle = 1000;
+	}
+}
+
 /* The gather passes over a flat patch's pairs with itself on a guess (collision/flat_patches.h):
  * flat along the paths it expects. Here the guess is wrong: after the gather, the sheet's far
  * half folds back through its near half within the substep, while every vertex keeps within
  * the guards the list believes in (widened by hand). No list holds the pairs that cross; the
  * failsafe must find the patch no longer flat along the substep's paths, sweep its pairs, and
- * leave no crossing. */
-Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_failsafe)
+ * leave no crossing. The patch is one of the sheet's own tree (own_patches), or, those left
+ * out, one of its cross patches (dynamics/mesh_contact_cross.c). */
+static void fold_a_passed_over_sheet(bool own_patches)
 {
 	plait_world_id world;
 	plait_object_id cloth;
@@ -2010,11 +2022,20 @@ Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_fail
 	for (int i = 0; i < p->count; ++i) {
 		p->point[i].x = p->x_prev[i] = p->x_start[i];
 	}
+	mc->cull_own = own_patches;
+	mc->cull_cross = !own_patches;
+	force_cross(mc);
 	long culled_before, unflattened_before, culled, unflattened;
 	plait_mesh_contacts_flat_counts(sim, &culled_before, &unflattened_before);
 	plait_mesh_contacts_gather(sim, mc);
 	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
 	cr_assert_gt(culled, culled_before, "the gather passed over no patch of a flat sheet");
+	const collision_object *o = &mc->objects[0];
+	int own = 0;
+	for (int n = 0; n < o->tree.node_count; ++n) {
+		own += o->culled[n] != 0;
+	}
+	cr_assert_eq(own > 0, own_patches, "%d patches of the sheet's own tree passed over", own);
 	/* The far half turned over the fold at x = 0, tilted about z so that it ends through the
 	 * near half along z = 0. */
 	for (int i = 0; i < p->count; ++i) {
@@ -2036,60 +2057,14 @@ Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_fail
 	plait_destroy_world(world);
 }
 
-/* The next gather fits the cross patches, whether or not they paid at the last (a gather
- * fits them only where they passed over enough pairs at the last that did, and tries again
- * every so many). */
-static void force_cross(plait_mesh_contacts *mc)
+Test(collide, a_passed_over_patch_that_folds_through_itself_is_swept_by_the_failsafe)
 {
-	for (int k = 0; k < mc->object_count; ++k) {
-		mc->objects[k].cross_fitted = false;
-		mc->objects[k].cross_idle = 1000;
-	}
+	fold_a_passed_over_sheet(true);
 }
 
-/* The same with a cross patch (dynamics/mesh_contact_cross.c): the objects' own patches left
- * out, the gather passes over the flat sheet's pairs within the cross tree's flat patches
- * only; they fold the same way, and the failsafe must find the cross patch no longer flat and
- * sweep its pairs. */
 Test(collide, a_passed_over_cross_patch_that_folds_through_itself_is_swept_by_the_failsafe)
 {
-	plait_world_id world;
-	plait_object_id cloth;
-	plait_mesh_contacts *mc = fine_sheet(&world, 0.001f, &cloth);
-	plait_sim *sim = &world.world->sim;
-	plait_particles *p = &sim->particles;
-	for (int i = 0; i < p->count; ++i) {
-		p->point[i].x = p->x_prev[i] = p->x_start[i];
-	}
-	mc->cull_own = false;
-	force_cross(mc);
-	long culled_before, unflattened_before, culled, unflattened;
-	plait_mesh_contacts_flat_counts(sim, &culled_before, &unflattened_before);
-	plait_mesh_contacts_gather(sim, mc);
-	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
-	const collision_object *o = &mc->objects[0];
-	cr_assert(o->cross_fitted, "the gather fitted no cross patches");
-	cr_assert_gt(culled, culled_before, "the gather passed over no cross patch of a flat sheet");
-	for (int n = 0; n < o->tree.node_count; ++n) {
-		cr_assert_eq(o->culled[n], 0, "node %d of the sheet's own tree was passed over", n);
-	}
-	for (int i = 0; i < p->count; ++i) {
-		vec3 x = p->x_start[i];
-		if (x.x > 0.0f) {
-			p->point[i].x = v3(-x.x, 0.2f * x.z, x.z);
-		}
-		mc->guard[i] = 1.0f;
-	}
-	plait_intersection_report report;
-	plait_world_check_intersections(world, &report, NULL);
-	cr_assert_gt(report.triangle_pairs, 0, "the fold crosses nothing");
-	plait_mesh_contacts_failsafe(sim);
-	plait_mesh_contacts_flat_counts(sim, &culled, &unflattened);
-	cr_expect_gt(unflattened, unflattened_before, "the failsafe swept no passed-over cross patch");
-	plait_world_check_intersections(world, &report, NULL);
-	cr_expect_eq(report.triangle_pairs, 0, "%d triangle pairs cross after the failsafe",
-	             report.triangle_pairs);
-	plait_destroy_world(world);
+	fold_a_passed_over_sheet(false);
 }
 
 /* A cloth draped over a ball is smooth but curved: its own flat patches leave seams between
