@@ -119,24 +119,6 @@ static void find_flat(collision_object *o, const plait_patch_paths *paths)
 	}
 }
 
-typedef struct cross_fit_job {
-	collision_object *object;
-	const plait_patch_paths *paths;
-	const int *roots;
-} cross_fit_job;
-
-static void fit_cross_subtrees(void *context, int begin, int end)
-{
-	const cross_fit_job *job = context;
-	for (int k = begin; k < end; ++k) {
-		plait_flat_patches_fit_subtree(&job->object->cross, &job->object->cross_tree, job->paths,
-		                               job->roots[k]);
-	}
-}
-
-/* Cross trees are fitted like the objects' own (mesh_contact_listing.c: CUT_LEVELS). */
-#define CROSS_CUT_LEVELS 5
-
 /* Gathers after which cross patches that did not pay are tried again. */
 #define CROSS_RETRY 8
 
@@ -173,11 +155,7 @@ void plait_mesh_contacts_fit_cross(plait_sim *sim, collision_object *o, const pl
 	if (!fit) {
 		return;
 	}
-	int roots[1 << CROSS_CUT_LEVELS];
-	int count = plait_element_tree_cut(&o->cross_tree, CROSS_CUT_LEVELS, roots);
-	cross_fit_job job = {o, paths, roots};
-	plait_parallel_for(&sim->parallel, fit_cross_subtrees, &job, 0, count, 1);
-	plait_flat_patches_fit_above(&o->cross, &o->cross_tree, CROSS_CUT_LEVELS);
+	plait_mesh_contacts_fit_tree_patches(sim, &o->cross, &o->cross_tree, paths);
 	find_flat(o, paths);
 }
 

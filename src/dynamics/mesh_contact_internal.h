@@ -506,6 +506,10 @@ typedef struct flat_skip {
 	vec3 *culled_axis; /* per node: the direction a skipped patch faced (with culled) */
 } flat_skip;
 bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pass *pass);
+/* Fits a tree's flat patches to `paths`, subtree by subtree on the workers (the same cones as
+ * all at once). */
+void plait_mesh_contacts_fit_tree_patches(plait_sim *sim, plait_flat_patches *patches,
+                                          const plait_element_tree *tree, const plait_patch_paths *paths);
 /* Fits every object's flat patches to `paths` for the traversals of stage `of`. */
 void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, const plait_patch_paths *paths,
                                      stage of);

@@ -217,22 +217,38 @@ bool plait_mesh_contacts_culls_flat(const plait_mesh_contacts *mc, const pair_pa
 
 /* Normal cones are fitted the same way as boxes (CUT_LEVELS). */
 typedef struct fit_job {
-	collision_object *object;
+	plait_flat_patches *patches;
+	const plait_element_tree *tree;
 	const plait_patch_paths *paths;
 	const int *roots;
 } fit_job;
 
 static void fit_subtrees(void *context, int begin, int end)
 {
-	fit_job *job = context;
+	const fit_job *job = context;
 	for (int k = begin; k < end; ++k) {
-		plait_flat_patches_fit_subtree(&job->object->patches, &job->object->tree, job->paths, job->roots[k]);
+		plait_flat_patches_fit_subtree(job->patches, job->tree, job->paths, job->roots[k]);
 	}
 }
 
+void plait_mesh_contacts_fit_tree_patches(plait_sim *sim, plait_flat_patches *patches,
+                                          const plait_element_tree *tree, const plait_patch_paths *paths)
+{
+	int roots[1 << CUT_LEVELS];
+	int count = plait_element_tree_cut(tree, CUT_LEVELS, roots);
+	fit_job job = {patches, tree, paths, roots};
+	plait_parallel_for(&sim->parallel, fit_subtrees, &job, 0, count, 1);
+	plait_flat_patches_fit_above(patches, tree, CUT_LEVELS);
+}
+
+typedef struct normals_job {
+	collision_object *object;
+	const plait_patch_paths *paths;
+} normals_job;
+
 static void find_normals(void *context, int begin, int end)
 {
-	const fit_job *job = context;
+	const normals_job *job = context;
 	plait_flat_patches_normals(&job->object->patches, job->paths, begin, end, job->object->normals);
 }
 
@@ -254,15 +270,11 @@ void plait_mesh_contacts_fit_patches(plait_sim *sim, plait_mesh_contacts *mc, co
 		    of == STAGE_GATHER && o->cross_of != NULL && mc->cull_cross && plait_mesh_contacts_cross_pays(o);
 		plait_patch_paths object_paths = *paths;
 		if (cross) {
-			fit_job normals = {o, paths, NULL};
+			normals_job normals = {o, paths};
 			plait_parallel_for(&sim->parallel, find_normals, &normals, 0, o->count, NORMALS_GRAIN);
 			object_paths.normals = o->normals;
 		}
-		int roots[1 << CUT_LEVELS];
-		int count = plait_element_tree_cut(&o->tree, CUT_LEVELS, roots);
-		fit_job job = {o, &object_paths, roots};
-		plait_parallel_for(&sim->parallel, fit_subtrees, &job, 0, count, 1);
-		plait_flat_patches_fit_above(&o->patches, &o->tree, CUT_LEVELS);
+		plait_mesh_contacts_fit_tree_patches(sim, &o->patches, &o->tree, &object_paths);
 		if (of == STAGE_GATHER && o->cross_of != NULL) {
 			plait_mesh_contacts_fit_cross(sim, o, &object_paths, cross);
 		}
