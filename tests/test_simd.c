@@ -440,11 +440,13 @@ Test(simd, a_grid_cloth_is_projected_on_columns_and_a_scrambled_one_is_not)
 			plait_world_id world = plait_create_world(&wdef, NULL);
 			test_grid grid = test_grid_make(64, 64, 2.0f, 2.0f);
 			if (scrambled) {
-				/* Vertex v becomes (v * 2654435761) mod n: n = 4096, an odd multiplier, a permutation. */
+				/* Vertex v becomes (v * 2654435761) mod n, n = 65 x 65: the multiplier is a prime
+				 * that does not divide n, so a permutation (in 64 bits: modulo 2^32 first it was
+				 * not, and left vertices unwritten, which made the test fail at random). */
 				int n = grid.vertex_count;
 				plait_vec3 *moved = malloc(sizeof *moved * (size_t)n);
 				for (int v = 0; v < n; ++v) {
-					moved[(int)(((uint32_t)v * 2654435761u) % (uint32_t)n)] = grid.positions[v];
+					moved[(int)(((uint64_t)v * 2654435761u) % (uint64_t)n)] = grid.positions[v];
 				}
 				memcpy(grid.positions, moved, sizeof *moved * (size_t)n);
 				free(moved);
@@ -454,7 +456,7 @@ Test(simd, a_grid_cloth_is_projected_on_columns_and_a_scrambled_one_is_not)
 				}
 				for (int k = 0; k < corners; ++k) {
 					grid.face_indices[k] =
-					    (int)(((uint32_t)grid.face_indices[k] * 2654435761u) % (uint32_t)n);
+					    (int)(((uint64_t)grid.face_indices[k] * 2654435761u) % (uint64_t)n);
 				}
 			}
 			plait_cloth_def def = plait_default_cloth_def();
