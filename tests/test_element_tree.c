@@ -244,29 +244,39 @@ static void count_triangle(int t, void *context)
 	((visit_count *)context)->visited += 1;
 }
 
-Test(mesh_shape, any_is_whether_the_visit_finds_a_triangle)
+/* A grid of 12 x 12 quads over [0, 1]^2 at z = 0, bent up along x so that boxes differ. */
+enum { BENT_N = 13 };
+typedef struct bent_grid {
+	plait_vec3 positions[BENT_N * BENT_N];
+	int face_sizes[(BENT_N - 1) * (BENT_N - 1)], faces[4 * (BENT_N - 1) * (BENT_N - 1)];
+} bent_grid;
+
+static plait_mesh_def make_bent_grid(bent_grid *g)
 {
-	/* A grid of 12 x 12 quads over [0, 1]^2 at z = 0, bent up along x so that boxes differ. */
-	enum { N = 13 };
-	plait_vec3 positions[N * N];
-	int face_sizes[(N - 1) * (N - 1)], faces[4 * (N - 1) * (N - 1)];
+	enum { N = BENT_N };
 	for (int j = 0; j < N; ++j) {
 		for (int i = 0; i < N; ++i) {
 			float x = (float)i / (float)(N - 1), y = (float)j / (float)(N - 1);
-			positions[j * N + i] = (plait_vec3){x, y, 0.5f * x * x};
+			g->positions[j * N + i] = (plait_vec3){x, y, 0.5f * x * x};
 		}
 	}
 	for (int j = 0; j + 1 < N; ++j) {
 		for (int i = 0; i + 1 < N; ++i) {
 			int f = j * (N - 1) + i;
-			face_sizes[f] = 4;
-			faces[4 * f + 0] = j * N + i;
-			faces[4 * f + 1] = j * N + i + 1;
-			faces[4 * f + 2] = (j + 1) * N + i + 1;
-			faces[4 * f + 3] = (j + 1) * N + i;
+			g->face_sizes[f] = 4;
+			g->faces[4 * f + 0] = j * N + i;
+			g->faces[4 * f + 1] = j * N + i + 1;
+			g->faces[4 * f + 2] = (j + 1) * N + i + 1;
+			g->faces[4 * f + 3] = (j + 1) * N + i;
 		}
 	}
-	plait_mesh_def def = {positions, N * N, face_sizes, (N - 1) * (N - 1), faces};
+	return (plait_mesh_def){g->positions, N * N, g->face_sizes, (N - 1) * (N - 1), g->faces};
+}
+
+Test(mesh_shape, any_is_whether_the_visit_finds_a_triangle)
+{
+	bent_grid grid;
+	plait_mesh_def def = make_bent_grid(&grid);
 	plait_mesh_shape shape = {0};
 	plait_error error = {0};
 	cr_assert_eq(plait_mesh_shape_build(&shape, &heap, &def, &error), PLAIT_OK, "%s", error.message);
@@ -284,6 +294,80 @@ Test(mesh_shape, any_is_whether_the_visit_finds_a_triangle)
 		found += v.visited > 0;
 	}
 	cr_assert(found > 200 && found < 1800, "the boxes should both meet and miss the mesh (%d met)", found);
+	plait_mesh_shape_destroy(&shape, &heap);
+}
+
+typedef struct visit_marks {
+	unsigned char marks[2 * (BENT_N - 1) * (BENT_N - 1)];
+} visit_marks;
+
+static void mark_triangle(int t, void *context)
+{
+	((visit_marks *)context)->marks[t] += 1;
+}
+
+/* Every query of the hierarchy against every triangle, one by one: the visit meets each
+ * triangle whose box (over its sweep) overlaps, once, and the distance is the nearest. */
+static void expect_queries_match_the_triangles(const plait_mesh_shape *shape, const char *when)
+{
+	unsigned state = 11u;
+	int near = 0;
+	for (int k = 0; k < 1000; ++k) {
+		float x = 1.4f * next_unit(&state) - 0.2f, y = 1.4f * next_unit(&state) - 0.2f;
+		vec3 c = v3(x, y, 0.5f * x * x + 0.4f * (next_unit(&state) - 0.5f));
+		float h = 0.06f * next_unit(&state);
+		vec3 lower = v3_sub(c, v3(h, h, h)), upper = v3_add(c, v3(h, h, h));
+		visit_marks v = {{0}};
+		plait_mesh_shape_visit(shape, lower, upper, true, mark_triangle, &v);
+		float nearest = INFINITY;
+		for (int t = 0; t < shape->triangle_count; ++t) {
+			const int *tri = shape->triangles[t];
+			vec3 tl =
+			    v3_min(shape->positions[tri[0]], v3_min(shape->positions[tri[1]], shape->positions[tri[2]]));
+			vec3 tu =
+			    v3_max(shape->positions[tri[0]], v3_max(shape->positions[tri[1]], shape->positions[tri[2]]));
+			if (shape->start_positions != NULL) {
+				const vec3 *s = shape->start_positions;
+				tl = v3_min(tl, v3_min(s[tri[0]], v3_min(s[tri[1]], s[tri[2]])));
+				tu = v3_max(tu, v3_max(s[tri[0]], v3_max(s[tri[1]], s[tri[2]])));
+			}
+			bool overlaps = tl.x <= upper.x && lower.x <= tu.x && tl.y <= upper.y && lower.y <= tu.y &&
+			                tl.z <= upper.z && lower.z <= tu.z;
+			cr_assert_eq(v.marks[t], overlaps ? 1 : 0,
+			             "%s, box %d: triangle %d visited %d times, overlaps %d", when, k, t, v.marks[t],
+			             overlaps);
+			int region;
+			vec3 q = plait_closest_point_on_triangle(c, shape->positions[tri[0]], shape->positions[tri[1]],
+			                                         shape->positions[tri[2]], &region, NULL);
+			nearest = fminf(nearest, v3_length(v3_sub(c, q)));
+		}
+		vec3 normal;
+		float distance = fabsf(plait_mesh_shape_distance(shape, c, &normal));
+		cr_assert(fabsf(distance - nearest) <= 1e-5f * nearest + 1e-7f,
+		          "%s, point %d: %.9g from the hierarchy, %.9g from the nearest triangle", when, k, distance,
+		          nearest);
+		near += nearest < 0.05f;
+	}
+	cr_assert(near > 100, "%s: the points should come near the mesh (%d did)", when, near);
+}
+
+Test(mesh_shape, visits_and_distances_follow_a_deforming_mesh)
+{
+	bent_grid grid;
+	plait_mesh_def def = make_bent_grid(&grid);
+	plait_mesh_shape shape = {0};
+	plait_error error = {0};
+	cr_assert_eq(plait_mesh_shape_build(&shape, &heap, &def, &error), PLAIT_OK, "%s", error.message);
+	expect_queries_match_the_triangles(&shape, "built");
+	cr_assert_eq(plait_mesh_shape_make_deforming(&shape, &heap, &error), PLAIT_OK, "%s", error.message);
+	/* The grid flattens and slides along y over the frame: the substep [0.5, 0.75]. */
+	vec3 from[BENT_N * BENT_N], to[BENT_N * BENT_N];
+	for (int v = 0; v < BENT_N * BENT_N; ++v) {
+		from[v] = v3(grid.positions[v].x, grid.positions[v].y, grid.positions[v].z);
+		to[v] = v3(from[v].x, from[v].y + 0.1f, 0.25f * from[v].z + 0.1f * from[v].y);
+	}
+	plait_mesh_shape_deform(&shape, from, to, 0.5f, 0.75f);
+	expect_queries_match_the_triangles(&shape, "deformed");
 	plait_mesh_shape_destroy(&shape, &heap);
 }
 

@@ -17,6 +17,9 @@ void plait_mesh_shape_destroy(plait_mesh_shape *shape, const plait_allocator *al
 	plait_free(allocator, shape->normals);
 	plait_free(allocator, shape->nodes);
 	plait_free(allocator, shape->triangle_order);
+	plait_free(allocator, shape->slot_corners);
+	plait_free(allocator, shape->slot_lower);
+	plait_free(allocator, shape->slot_upper);
 	plait_free(allocator, shape->start_positions);
 	memset(shape, 0, sizeof *shape);
 }
@@ -33,7 +36,19 @@ static void triangle_bounds(const plait_mesh_shape *shape, int t, vec3 *lower, v
 	}
 }
 
-/* Builds the node at index `node` over order[first, first + count); returns the next free node. */
+/* The slots' corners and boxes, from positions (and start_positions when deforming). */
+static void fill_slots(plait_mesh_shape *shape)
+{
+	for (int k = 0; k < shape->triangle_count; ++k) {
+		int t = shape->triangle_order[k];
+		const int *tri = shape->triangles[t];
+		for (int c = 0; c < 3; ++c) {
+			shape->slot_corners[3 * k + c] = shape->positions[tri[c]];
+		}
+		triangle_bounds(shape, t, &shape->slot_lower[k], &shape->slot_upper[k]);
+	}
+}
+
 /* Node `node` over the triangles in [first, first + count) of the orders, and its subtree;
  * returns the next free node index. A leaf's triangles go to triangle_order in the order of
  * its parent's axis (root: as given). */
@@ -112,9 +127,13 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
 	shape->normals = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
 	shape->nodes = plait_alloc_zero(allocator, (size_t)shape->node_count, sizeof *shape->nodes);
 	shape->triangle_order = plait_alloc(allocator, sizeof(int) * (size_t)triangles);
+	shape->slot_corners = plait_alloc(allocator, sizeof(vec3) * 3 * (size_t)triangles);
+	shape->slot_lower = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
+	shape->slot_upper = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
 	vec3 *centroid = plait_alloc(allocator, sizeof(vec3) * (size_t)triangles);
 	if (!shape->positions || !shape->triangles || !shape->normals || !shape->nodes ||
-	    !shape->triangle_order || !centroid) {
+	    !shape->triangle_order || !shape->slot_corners || !shape->slot_lower || !shape->slot_upper ||
+	    !centroid) {
 		plait_free(allocator, centroid);
 		plait_mesh_shape_destroy(shape, allocator);
 		return plait_error_set(error, PLAIT_ERROR_OUT_OF_MEMORY, "out of memory building a mesh collider");
@@ -142,6 +161,7 @@ plait_result plait_mesh_shape_build(plait_mesh_shape *shape, const plait_allocat
 	}
 	int used = build_node(shape, centroid, &orders, 0, 0, triangles, 1, -1);
 	shape->node_count = used;
+	fill_slots(shape);
 	plait_axis_orders_free(&orders, allocator);
 	plait_free(allocator, centroid);
 	shape->closed = plait_triangles_are_closed((const int(*)[3])shape->triangles, triangles, allocator);
@@ -227,16 +247,15 @@ void plait_mesh_shape_deform(plait_mesh_shape *shape, const vec3 *from, const ve
 		vec3 a = shape->positions[tri[0]], b = shape->positions[tri[1]], c = shape->positions[tri[2]];
 		shape->normals[t] = v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a)));
 	}
+	fill_slots(shape);
 	/* Children always come after their parent (build_node), so one backward pass refits. */
 	for (int n = shape->node_count - 1; n >= 0; --n) {
 		plait_bvh_node *node = &shape->nodes[n];
 		if (node->count > 0) {
 			vec3 lower = {INFINITY, INFINITY, INFINITY}, upper = {-INFINITY, -INFINITY, -INFINITY};
 			for (int k = node->first; k < node->first + node->count; ++k) {
-				vec3 tl, tu;
-				triangle_bounds(shape, shape->triangle_order[k], &tl, &tu);
-				lower = v3_min(lower, tl);
-				upper = v3_max(upper, tu);
+				lower = v3_min(lower, shape->slot_lower[k]);
+				upper = v3_max(upper, shape->slot_upper[k]);
 			}
 			node->lower = lower;
 			node->upper = upper;
@@ -254,35 +273,39 @@ static bool boxes_overlap(vec3 al, vec3 au, vec3 bl, vec3 bu)
 }
 
 /* The walk of plait_mesh_shape_visit; with first_only it stops at the first triangle whose own
- * box overlaps, without visiting it, and says whether there was one (plait_mesh_shape_any). */
+ * box overlaps, without visiting it, and says whether there was one (plait_mesh_shape_any).
+ * Depth first, left child first; a child's box is tested before it is pushed, so a node that
+ * cannot overlap is never loaded again. */
 static inline bool walk_boxes(const plait_mesh_shape *shape, vec3 lower, vec3 upper, bool test_triangles,
                               plait_triangle_visitor *visit, void *context, bool first_only)
 {
+	const plait_bvh_node *nodes = shape->nodes;
+	if (!boxes_overlap(nodes[0].lower, nodes[0].upper, lower, upper)) {
+		return false;
+	}
 	int stack[64], depth = 0;
 	stack[depth++] = 0;
 	while (depth > 0) {
-		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
-		if (!boxes_overlap(n->lower, n->upper, lower, upper)) {
-			continue;
-		}
+		const plait_bvh_node *n = &nodes[stack[--depth]];
 		if (n->count > 0) {
 			for (int k = n->first; k < n->first + n->count; ++k) {
-				int t = shape->triangle_order[k];
-				if (test_triangles) {
-					vec3 tl, tu;
-					triangle_bounds(shape, t, &tl, &tu);
-					if (!boxes_overlap(tl, tu, lower, upper)) {
-						continue;
-					}
+				if (test_triangles &&
+				    !boxes_overlap(shape->slot_lower[k], shape->slot_upper[k], lower, upper)) {
+					continue;
 				}
 				if (first_only) {
 					return true;
 				}
-				visit(t, context);
+				visit(shape->triangle_order[k], context);
 			}
 		} else if (depth + 2 <= 64) {
-			stack[depth++] = n->first + 1;
-			stack[depth++] = n->first;
+			const plait_bvh_node *left = &nodes[n->first], *right = left + 1;
+			if (boxes_overlap(right->lower, right->upper, lower, upper)) {
+				stack[depth++] = n->first + 1;
+			}
+			if (boxes_overlap(left->lower, left->upper, lower, upper)) {
+				stack[depth++] = n->first;
+			}
 		}
 	}
 	return false;
@@ -352,37 +375,55 @@ vec3 plait_closest_point_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c, int *region
 	return weighted(a, b, c, 1.0f - v - w, v, w, weights);
 }
 
+/* Squared distance from p to the box of n (0 inside it). */
+static inline float box_distance_sq(const plait_bvh_node *n, vec3 p)
+{
+	return v3_length_sq(v3_sub(v3_max(n->lower, v3_min(p, n->upper)), p));
+}
+
 float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *normal)
 {
 	/* Branch and bound over the hierarchy. Where several triangles share the nearest point (an
 	 * edge or a corner), the sign comes from the one p is most in front of: beyond a convex edge
 	 * that is positive, inside negative, so a point beyond a sharp edge is not taken for
-	 * inside. */
+	 * inside. A child goes on the stack with its box's distance, only if that is within the
+	 * bound at the time, and is passed over when it is popped if the bound has come nearer
+	 * since (the nearer child is pushed last, popped first: its triangles tighten the bound
+	 * that prunes the other). */
 	float best_sq = INFINITY, best_alignment = -INFINITY;
 	int best = -1;
 	vec3 best_point = p;
 	int stack[64], depth = 0;
-	stack[depth++] = 0;
+	float stack_distance_sq[64];
+	stack[depth] = 0;
+	stack_distance_sq[depth++] = box_distance_sq(&shape->nodes[0], p);
 	while (depth > 0) {
-		const plait_bvh_node *n = &shape->nodes[stack[--depth]];
-		vec3 clamped = v3_max(n->lower, v3_min(p, n->upper));
-		if (v3_length_sq(v3_sub(clamped, p)) > best_sq * (1.0f + 1e-5f)) {
+		--depth;
+		if (stack_distance_sq[depth] > best_sq * (1.0f + 1e-5f)) {
 			continue;
 		}
+		const plait_bvh_node *n = &shape->nodes[stack[depth]];
 		if (n->count > 0) {
 			for (int k = n->first; k < n->first + n->count; ++k) {
-				int t = shape->triangle_order[k];
-				const int *tri = shape->triangles[t];
+				/* The triangle's box is a bound as cheap as the node's: a triangle whose box is
+				 * beyond the bound is neither nearer nor tied. */
+				vec3 to_box = v3_sub(v3_max(shape->slot_lower[k], v3_min(p, shape->slot_upper[k])), p);
+				if (v3_length_sq(to_box) > best_sq * (1.0f + 1e-5f)) {
+					continue;
+				}
+				const vec3 *corner = &shape->slot_corners[3 * k];
 				int region;
-				vec3 q =
-				    plait_closest_point_on_triangle(p, shape->positions[tri[0]], shape->positions[tri[1]],
-				                                    shape->positions[tri[2]], &region, NULL);
+				vec3 q = plait_closest_point_on_triangle(p, corner[0], corner[1], corner[2], &region, NULL);
 				vec3 d = v3_sub(p, q);
 				float d_sq = v3_length_sq(d);
-				float alignment = v3_dot(d, shape->normals[t]);
 				bool nearer = d_sq < best_sq * (1.0f - 1e-5f);
 				bool tied = !nearer && d_sq <= best_sq * (1.0f + 1e-5f);
-				if (nearer || (tied && alignment > best_alignment)) {
+				if (!nearer && !tied) {
+					continue;
+				}
+				int t = shape->triangle_order[k];
+				float alignment = v3_dot(d, shape->normals[t]);
+				if (nearer || alignment > best_alignment) {
 					best_sq = nearer ? d_sq : plait_minf(best_sq, d_sq);
 					best_alignment = alignment;
 					best = t;
@@ -390,14 +431,20 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 				}
 			}
 		} else if (depth + 2 <= 64) {
-			/* The nearer child first (pushed last): its triangles tighten the bound that
-			 * prunes the other. */
-			const plait_bvh_node *left = &shape->nodes[n->first], *right = &shape->nodes[n->first + 1];
-			float to_left = v3_length_sq(v3_sub(v3_max(left->lower, v3_min(p, left->upper)), p));
-			float to_right = v3_length_sq(v3_sub(v3_max(right->lower, v3_min(p, right->upper)), p));
+			const plait_bvh_node *left = &shape->nodes[n->first], *right = left + 1;
+			float to_left = box_distance_sq(left, p), to_right = box_distance_sq(right, p);
 			bool left_first = to_left <= to_right;
-			stack[depth++] = left_first ? n->first + 1 : n->first;
-			stack[depth++] = left_first ? n->first : n->first + 1;
+			int near_child = left_first ? n->first : n->first + 1;
+			float near_sq = left_first ? to_left : to_right, far_sq = left_first ? to_right : to_left;
+			float bound = best_sq * (1.0f + 1e-5f);
+			if (far_sq <= bound) {
+				stack[depth] = left_first ? n->first + 1 : n->first;
+				stack_distance_sq[depth++] = far_sq;
+			}
+			if (near_sq <= bound) {
+				stack[depth] = near_child;
+				stack_distance_sq[depth++] = near_sq;
+			}
 		}
 	}
 	if (best < 0) {

@@ -24,7 +24,12 @@ typedef struct plait_mesh_shape {
 	vec3 *normals; /* unit normal of each triangle (zero for a degenerate one) */
 	int node_count;
 	plait_bvh_node *nodes;
-	int *triangle_order;
+	int *triangle_order; /* slot k of the leaves holds triangle triangle_order[k] */
+	/* Per slot, in leaf order so that a leaf's triangles are read without going through their
+	 * vertex indices: the triangle's corners (slot_corners[3k .. 3k + 2], at positions) and its
+	 * box (over its sweep when deforming). Kept with positions by build and deform. */
+	vec3 *slot_corners;
+	vec3 *slot_lower, *slot_upper;
 	/* Deforming meshes only (NULL when rigid): vertex positions at the start of the current
 	 * substep, positions holding those at its end. Normals are those at the end. */
 	vec3 *start_positions;

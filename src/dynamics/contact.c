@@ -386,21 +386,26 @@ static bool collide_point_with_mesh(const plait_mesh_shape *mesh, vec3 p0, vec3 
 			}
 		}
 	}
-	/* A particle with no triangle within its radius is not touching; it could only be deep
-	 * inside, which a thorough pass (the first substep of each frame) looks for. */
-	bool near = pass.moved || plait_mesh_shape_any(mesh, v3_sub(pass.p1, grow), v3_add(pass.p1, grow));
-	if (mesh->closed && (near || thorough)) {
+	if (mesh->closed) {
 		/* Trapped check (seed 000 §4.4): whatever side the particle came from, it must end
 		 * outside a closed mesh, by the radius. The signed distance settles inside and
-		 * outside near edges and corners too. */
+		 * outside near edges and corners too. A particle with no triangle's box within its
+		 * radius is not touching; it could only be deep inside, which a thorough pass (the
+		 * first substep of each frame) looks for. The distance comes first: ending outside,
+		 * the particle is pushed only within the radius, where some triangle's box is too, so
+		 * the boxes are searched only for one that ends inside. */
 		vec3 normal;
 		float outside = mesh->outward * plait_mesh_shape_distance(mesh, pass.p1, &normal);
-		*measured_at = pass.p1;
-		*measured = outside;
-		if (outside < radius) {
-			push_out(&pass, v3_scale(normal, mesh->outward), radius - outside, v3(0.0f, 0.0f, 0.0f));
+		bool near = pass.moved || thorough || outside >= 0.0f ||
+		            plait_mesh_shape_any(mesh, v3_sub(pass.p1, grow), v3_add(pass.p1, grow));
+		if (near) {
+			*measured_at = pass.p1;
+			*measured = outside;
+			if (outside < radius) {
+				push_out(&pass, v3_scale(normal, mesh->outward), radius - outside, v3(0.0f, 0.0f, 0.0f));
+			}
 		}
-	} else if (!mesh->closed) {
+	} else {
 		plait_mesh_shape_visit(mesh, lower, upper, true, visit_proximity, &pass);
 	}
 	if (!pass.moved) {
