@@ -21,6 +21,8 @@
  *                      [--thickness-per-edge R] (hang-self: thickness R times the edge, not 4 mm)
  *                      [--stiff] (hang-self: issue 4's stiff constraints and tethers, 6 substeps)
  *                      [--mesh-colliders] (arm, drape, twist: the capsules and spheres as meshes)
+ *                      [--deforming-colliders] (twist: the sphere mesh turned vertex by vertex;
+ *                       arm: one skinned mesh bent at the elbow; both deforming mesh colliders)
  *                      [--box-colliders] (arm: the capsules as square box bars)
  *                      [--coarse-floor] (pile: onto a coarse sheet of 3 x 3 vertices)
  *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
@@ -189,6 +191,8 @@ int main(int argc, char **argv)
 			options.thickness_per_edge = (float)atof(argv[++a]);
 		} else if (strcmp(argv[a], "--mesh-colliders") == 0) {
 			options.mesh_colliders = true;
+		} else if (strcmp(argv[a], "--deforming-colliders") == 0) {
+			options.mesh_colliders = options.deforming_colliders = true;
 		} else if (strcmp(argv[a], "--box-colliders") == 0) {
 			options.box_colliders = true;
 		} else if (strcmp(argv[a], "--coarse-floor") == 0) {
@@ -215,7 +219,8 @@ int main(int argc, char **argv)
 				fprintf(stderr,
 				        "usage: bench_collide [SCENE...] [--n N] [--frames F] [--runs R] [--threads T] "
 				        "[--no-check] [--self-flag full|vertex_face|vertex] [--thickness-per-edge R] "
-				        "[--stiff] [--mesh-colliders] [--box-colliders] [--coarse-floor] [--substeps S] "
+				        "[--stiff] [--mesh-colliders] [--deforming-colliders] [--box-colliders] "
+				        "[--coarse-floor] [--substeps S] "
 				        "[--sphere-slices S] "
 				        "[--verbose] "
 				        "[--per-frame] [--variants K]\n"

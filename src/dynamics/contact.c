@@ -20,12 +20,12 @@ static plait_transform lerp_transform(plait_transform a, plait_transform b, floa
 	return r;
 }
 
-/* Room for a closed rigid mesh collider's clearances (sim.h), unknown for new particles; on
- * failure the collider goes without. */
+/* Room for a closed mesh collider's clearances (sim.h), unknown for new particles; on failure
+ * the collider goes without. */
 static void reserve_clearances(plait_sim *sim, plait_collider *c)
 {
 	int count = sim->particles.count;
-	bool wanted = c->shape.type == PLAIT_SHAPE_MESH && c->mesh_end == NULL && c->shape.mesh->closed;
+	bool wanted = c->shape.type == PLAIT_SHAPE_MESH && c->shape.mesh->closed;
 	if (!wanted || c->clear_capacity >= count) {
 		return;
 	}
@@ -33,28 +33,43 @@ static void reserve_clearances(plait_sim *sim, plait_collider *c)
 	int capacity = count + count / 2;
 	vec3 *at = plait_alloc(a, sizeof *at * (size_t)capacity);
 	float *clearance = plait_alloc(a, sizeof *clearance * (size_t)capacity);
-	if (at != NULL && clearance != NULL && c->clear_capacity > 0) {
+	double *drift = plait_alloc(a, sizeof *drift * (size_t)capacity);
+	bool made = at != NULL && clearance != NULL && drift != NULL;
+	if (made && c->clear_capacity > 0) {
 		memcpy(at, c->clear_at, sizeof *at * (size_t)c->clear_capacity);
 		memcpy(clearance, c->clearance, sizeof *clearance * (size_t)c->clear_capacity);
+		memcpy(drift, c->clear_drift, sizeof *drift * (size_t)c->clear_capacity);
 	}
-	int known = at != NULL && clearance != NULL ? c->clear_capacity : 0;
+	int known = made ? c->clear_capacity : 0;
 	plait_free(a, c->clear_at);
 	plait_free(a, c->clearance);
+	plait_free(a, c->clear_drift);
 	c->clear_at = NULL;
 	c->clearance = NULL;
+	c->clear_drift = NULL;
 	c->clear_capacity = 0;
-	if (at == NULL || clearance == NULL) {
+	if (!made) {
 		plait_free(a, at);
 		plait_free(a, clearance);
+		plait_free(a, drift);
 		return;
 	}
 	for (int i = known; i < capacity; ++i) {
 		clearance[i] = -INFINITY;
 		at[i] = v3(0.0f, 0.0f, 0.0f);
+		drift[i] = 0.0;
 	}
 	c->clear_at = at;
 	c->clearance = clearance;
+	c->clear_drift = drift;
 	c->clear_capacity = capacity;
+}
+
+void plait_collider_forget_clearances(plait_collider *c)
+{
+	for (int i = 0; i < c->clear_capacity; ++i) {
+		c->clearance[i] = -INFINITY;
+	}
 }
 
 void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
@@ -66,6 +81,7 @@ void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1)
 		c->rigid_end = plait_rigid_from_transform(lerp_transform(c->transform_start, c->transform_end, t1));
 		if (c->mesh_end != NULL) {
 			plait_mesh_shape_deform(c->shape.mesh, c->mesh_start, c->mesh_end, t0, t1);
+			c->drift += (double)c->shape.mesh->largest_move;
 		}
 		/* Its vertices (particles) go where it is at the substep's end; they start from
 		 * where the last substep left them. */
@@ -620,10 +636,14 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 			 * as the tests below would find. The slack is twice what the sweep widens its
 			 * reach by for rounding (collision/static_sweep.c: 1e-5 of the radius, the motion,
 			 * and the distances from p0 to a corner and between corners), bounded through the
-			 * mesh's box, whose coordinates' sizes `extent` bounds. */
+			 * mesh's box, whose coordinates' sizes `extent` bounds. A deforming mesh's surface
+			 * has come nearer by at most its drift since (sim.h), this substep's included: its
+			 * boxes hold the triangles over the substep, and each point of a triangle is a
+			 * mean of its corners, each within that drift of where it was. */
 			const plait_bvh_node *root = &c->shape.mesh->nodes[0];
 			vec3 at = c->clear_at[i];
-			float moved = plait_maxf(v3_length(v3_sub(p0, at)), v3_length(v3_sub(p1, at)));
+			float moved = plait_maxf(v3_length(v3_sub(p0, at)), v3_length(v3_sub(p1, at))) +
+			              (float)(c->drift - c->clear_drift[i]);
 			float extent = fabsf(root->lower.x) + fabsf(root->lower.y) + fabsf(root->lower.z) +
 			               fabsf(root->upper.x) + fabsf(root->upper.y) + fabsf(root->upper.z);
 			float scale = radius + 4.0f * moved + fabsf(at.x) + fabsf(at.y) + fabsf(at.z) + 3.0f * extent;
@@ -639,6 +659,7 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 		if (cleared && measured > -INFINITY) {
 			c->clear_at[i] = measured_at;
 			c->clearance[i] = measured;
+			c->clear_drift[i] = c->drift;
 		}
 		if (!touched) {
 			return 0;

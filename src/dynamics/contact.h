@@ -20,6 +20,8 @@ float plait_combined_friction(float a, float b);
 
 /* Interpolates the collider transforms for the substep [t0, t1] (fractions of the frame). */
 void plait_colliders_begin_substep(plait_sim *sim, float t0, float t1);
+/* Forgets every clearance of a closed mesh collider (sim.h): after its mesh went back in time. */
+void plait_collider_forget_clearances(plait_collider *c);
 
 /* Decides which particles pair up in the substep and clears its pair contacts. (Each
  * particle's contact flags are cleared as the substep begins: solver.c.) */

@@ -259,14 +259,19 @@ typedef struct plait_collider {
 	 * cloth's triangles cannot pass between their vertices. They follow the collider substep by
 	 * substep (plait_colliders_begin_substep). */
 	int first, count;
-	/* A closed rigid mesh collider's clearances (NULL for every other, or when out of memory):
-	 * per particle, a point in shape space and how far outside the collider it is (its signed
-	 * distance there; -INFINITY: unknown). That distance changes by no more than the distance
-	 * moved, so a particle whose path keeps within clearance - radius of that point cannot touch
-	 * the collider and is passed over (contact.c). */
+	/* A closed mesh collider's clearances (NULL for every other, or when out of memory): per
+	 * particle, a point in shape space and how far outside the collider it is (its signed
+	 * distance there; -INFINITY: unknown), and the collider's drift when it was measured. The
+	 * drift (shape space units) sums the longest vertex move of every substep so far (0 for a
+	 * rigid mesh, which stands still in its space): every point of the surface keeps within the
+	 * drift since of where it was. That distance then changes by no more than the distance moved
+	 * plus the drift since, so a particle whose path keeps within clearance - radius - drift
+	 * since of that point cannot touch the collider and is passed over (contact.c). */
 	vec3 *clear_at;
 	float *clearance;
+	double *clear_drift;
 	int clear_capacity;
+	double drift;
 } plait_collider;
 
 /* A cloth's surface as other objects' vertices see it: its triangles (object-local indices)

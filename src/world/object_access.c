@@ -19,8 +19,10 @@ void plait_collider_release(plait_world *world, plait_collider *collider)
 	collider->mesh_end = NULL;
 	plait_free(&world->allocator, collider->clear_at);
 	plait_free(&world->allocator, collider->clearance);
+	plait_free(&world->allocator, collider->clear_drift);
 	collider->clear_at = NULL;
 	collider->clearance = NULL;
+	collider->clear_drift = NULL;
 	collider->clear_capacity = 0;
 }
 

@@ -245,7 +245,9 @@ static void finish_deforming_colliders(plait_sim *sim, bool advanced)
 		if (advanced) {
 			memcpy(c->mesh_start, c->mesh_end, sizeof(vec3) * (size_t)c->shape.mesh->vertex_count);
 		} else {
+			/* Back in time: what the failed frame measured against it no longer bounds. */
 			plait_mesh_shape_deform(c->shape.mesh, c->mesh_start, c->mesh_end, 0.0f, 0.0f);
+			plait_collider_forget_clearances(c);
 		}
 	}
 }

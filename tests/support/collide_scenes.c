@@ -241,6 +241,20 @@ static bool add_cloth(collide_scene *scene, const mesh *m, plait_cloth_def *def,
 	return true;
 }
 
+/* Keeps a deforming collider's rest vertices (scene->rest), to pose from frame by frame. */
+static bool keep_rest(collide_scene *scene, const mesh *m)
+{
+	size_t size = sizeof(plait_vec3) * (size_t)m->vertex_count;
+	scene->rest = malloc(size);
+	scene->posed = malloc(size);
+	if (scene->rest == NULL || scene->posed == NULL) {
+		return false;
+	}
+	memcpy(scene->rest, m->x, size);
+	scene->rest_count = m->vertex_count;
+	return true;
+}
+
 static bool add_ground(collide_scene *scene, float y, float friction, plait_error *error)
 {
 	plait_collider_def ground = plait_default_collider_def();
@@ -265,7 +279,11 @@ static plait_object_id add_sphere(collide_scene *scene, float r, plait_vec3 cent
 	mesh ball = sphere_mesh(40, 40, r, centre);
 	sphere.shape = PLAIT_SHAPE_MESH;
 	sphere.mesh = mesh_def(&ball);
+	sphere.deforming = scene->options.deforming_colliders;
 	plait_object_id id = plait_create_collider(scene->world, &sphere, error);
+	if (sphere.deforming && !plait_object_id_is_null(id) && !keep_rest(scene, &ball)) {
+		id = (plait_object_id){0};
+	}
 	mesh_free(&ball);
 	return id;
 }
@@ -373,7 +391,20 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		fore.a = (plait_vec3){0.0f, 0.0f, 0.0f};
 		fore.b = (plait_vec3){0.35f, 0.0f, 0.0f};
 		mesh upper_mesh = {0}, fore_mesh = {0};
-		if (scene->options.mesh_colliders) {
+		if (scene->options.deforming_colliders) {
+			/* One closed mesh of the whole arm, rings 1.5 cm apart, bent frame by frame. */
+			mesh arm = capsule_mesh(24, 4, 50, r, -0.4f, 0.35f);
+			upper.name = "arm";
+			upper.shape = PLAIT_SHAPE_MESH;
+			upper.mesh = mesh_def(&arm);
+			upper.deforming = true;
+			scene->animated = plait_create_collider(scene->world, &upper, error);
+			bool kept = !plait_object_id_is_null(scene->animated) && keep_rest(scene, &arm);
+			mesh_free(&arm);
+			if (!kept) {
+				return false;
+			}
+		} else if (scene->options.mesh_colliders) {
 			upper_mesh = capsule_mesh(24, 4, 12, r, -0.4f, 0.0f);
 			fore_mesh = capsule_mesh(24, 4, 12, r, 0.0f, 0.35f);
 			upper.shape = fore.shape = PLAIT_SHAPE_MESH;
@@ -389,8 +420,10 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 			fore.center = (plait_vec3){0.175f, 0.0f, 0.0f};
 			fore.size = (plait_vec3){0.35f, 0.1f, 0.1f};
 		}
-		bool made = !plait_object_id_is_null(plait_create_collider(scene->world, &upper, error));
-		scene->animated = made ? plait_create_collider(scene->world, &fore, error) : (plait_object_id){0};
+		if (!scene->options.deforming_colliders) {
+			bool made = !plait_object_id_is_null(plait_create_collider(scene->world, &upper, error));
+			scene->animated = made ? plait_create_collider(scene->world, &fore, error) : (plait_object_id){0};
+		}
 		mesh_free(&upper_mesh);
 		mesh_free(&fore_mesh);
 		if (plait_object_id_is_null(scene->animated)) {
@@ -488,10 +521,32 @@ bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, in
 	}
 	if (!build(scene, n, error)) {
 		plait_destroy_world(scene->world);
-		scene->world = (plait_world_id){0};
+		free(scene->rest);
+		free(scene->posed);
+		memset(scene, 0, sizeof *scene);
 		return false;
 	}
 	return true;
+}
+
+/* The skinned arm's vertex at rest position x (along the arm's axis, x) with its elbow bent by
+ * `angle` radians about z: the axis runs straight to the start of a 20 cm arc round the elbow
+ * (x = 0), along the arc, then straight on; each ring keeps its place across the axis, turned
+ * with it. The arc's radius (at least 10 cm) is wider than the arm (6 cm), so the bent mesh
+ * never passes through itself. */
+static plait_vec3 bend_arm(plait_vec3 x, float angle)
+{
+	const float arc = 0.2f, start = -0.5f * arc;
+	if (!(angle > 1e-4f) || x.x <= start) {
+		return x;
+	}
+	float radius = arc / angle;
+	float along = x.x - start, phi = along < arc ? along / radius : angle;
+	float beyond = along < arc ? 0.0f : along - arc;
+	float c = cosf(phi), s = sinf(phi);
+	/* The axis point, then the ring's offset: y along the arc's inward normal (-s, c), z as is. */
+	float ax = start + radius * s + beyond * c, ay = radius * (1.0f - c) + beyond * s;
+	return (plait_vec3){ax - x.y * s, ay + x.y * c, x.z};
 }
 
 plait_result collide_scene_step(collide_scene *scene, plait_error *error)
@@ -501,9 +556,21 @@ plait_result collide_scene_step(collide_scene *scene, plait_error *error)
 	if (scene->kind == SCENE_TWIST) {
 		/* Still for a second while the cloth settles, then half a turn per second. */
 		float angle = t < 1.0f ? 0.0f : 180.0f * (t - 1.0f);
-		plait_transform spin = plait_identity_transform();
-		spin.rotate_deg = (plait_vec3){0.0f, angle, 0.0f};
-		plait_result result = plait_collider_set_transform(scene->animated, spin, error);
+		plait_result result;
+		if (scene->rest != NULL) {
+			/* The same turn about the vertical, vertex by vertex (the sphere is at the origin). */
+			float c = cosf(angle * pi / 180.0f), s = sinf(angle * pi / 180.0f);
+			for (int v = 0; v < scene->rest_count; ++v) {
+				plait_vec3 x = scene->rest[v];
+				scene->posed[v] = (plait_vec3){c * x.x + s * x.z, x.y, -s * x.x + c * x.z};
+			}
+			result =
+			    plait_collider_set_mesh_positions(scene->animated, scene->posed, scene->rest_count, error);
+		} else {
+			plait_transform spin = plait_identity_transform();
+			spin.rotate_deg = (plait_vec3){0.0f, angle, 0.0f};
+			result = plait_collider_set_transform(scene->animated, spin, error);
+		}
 		if (result != PLAIT_OK) {
 			return result;
 		}
@@ -515,9 +582,18 @@ plait_result collide_scene_step(collide_scene *scene, plait_error *error)
 		              : t < 2.5f ? 1.0f
 		              : t < 4.0f ? (4.0f - t) / 1.5f
 		                         : 0.0f;
-		plait_transform bend = plait_identity_transform();
-		bend.rotate_deg = (plait_vec3){0.0f, 0.0f, 110.0f * phase};
-		plait_result result = plait_collider_set_transform(scene->animated, bend, error);
+		plait_result result;
+		if (scene->rest != NULL) {
+			for (int v = 0; v < scene->rest_count; ++v) {
+				scene->posed[v] = bend_arm(scene->rest[v], 110.0f * phase * pi / 180.0f);
+			}
+			result =
+			    plait_collider_set_mesh_positions(scene->animated, scene->posed, scene->rest_count, error);
+		} else {
+			plait_transform bend = plait_identity_transform();
+			bend.rotate_deg = (plait_vec3){0.0f, 0.0f, 110.0f * phase};
+			result = plait_collider_set_transform(scene->animated, bend, error);
+		}
 		if (result != PLAIT_OK) {
 			return result;
 		}
@@ -530,6 +606,8 @@ void collide_scene_destroy(collide_scene *scene)
 	if (!plait_world_id_is_null(scene->world)) {
 		plait_destroy_world(scene->world);
 	}
+	free(scene->rest);
+	free(scene->posed);
 	memset(scene, 0, sizeof *scene);
 }
 

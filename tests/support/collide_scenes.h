@@ -43,6 +43,11 @@ typedef struct collide_scene_options {
 	 * each); drape and twist: the sphere as a closed mesh of 40 slices and stacks (3,120
 	 * triangles); not analytic shapes */
 	bool mesh_colliders;
+	/* twist: the sphere mesh (mesh_colliders) turned by moving its vertices frame by frame, a
+	 * deforming mesh collider, not by its transform; arm: one closed mesh of the whole arm whose
+	 * vertices bend at the elbow frame by frame (a skinned arm: the axis bends along an arc 20 cm
+	 * long), not two rigid capsules */
+	bool deforming_colliders;
 	/* arm: the upper arm and forearm as square box bars 10 cm across, not capsules (their
 	 * vertices, edges and faces meet the sleeve in the mesh contacts) */
 	bool box_colliders;
@@ -58,9 +63,12 @@ typedef struct collide_scene {
 	plait_world_id world;
 	plait_object_id cloths[COLLIDE_SCENE_MAX_CLOTHS]; /* lowest first where they are stacked */
 	int cloth_count;
-	plait_object_id animated; /* the spinning sphere or the forearm */
-	int frames;               /* the scene's natural length */
-	int frame;                /* frames stepped so far */
+	plait_object_id animated; /* the spinning sphere or the forearm (or the deforming arm) */
+	/* A deforming collider's vertices at rest and as posed for the next frame (NULL when none) */
+	plait_vec3 *rest, *posed;
+	int rest_count;
+	int frames; /* the scene's natural length */
+	int frame;  /* frames stepped so far */
 	float fps;
 } collide_scene;
 
