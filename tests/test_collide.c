@@ -215,6 +215,54 @@ Test(collide, a_mending_passes_over_pairs_within_a_patch_that_kept_flat)
 	}
 }
 
+/* The gather's element normals, four triangles at a time in SSE2 lanes where there are lanes
+ * (mesh_contact_listing.c, fit_normals_range), are plait_triangle_normal's to the bit, a
+ * collapsed triangle's zero included: a draping sheet's and the sphere mesh's, after a few
+ * frames, one triangle squeezed to a point. */
+Test(collide, element_normals_are_the_triangles_own)
+{
+	collide_scene_options options = collide_scene_default_options();
+	options.mesh_colliders = true;
+	collide_scene scene;
+	plait_error error;
+	cr_assert(collide_scene_create_with(&scene, SCENE_DRAPE, 16, NULL, &options, &error), "%s",
+	          error.message);
+	for (int f = 0; f < 20; ++f) {
+		cr_assert_eq(collide_scene_step(&scene, &error), PLAIT_OK, "%s", error.message);
+	}
+	plait_sim *sim = &scene.world.world->sim;
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	plait_particles *p = &sim->particles;
+	int squeezed = -1;
+	for (int e = 0; e < mc->element_count && squeezed < 0; ++e) {
+		const element *el = &mc->elements[e];
+		if (el->size == 3 && p->point[el->v[0]].w > 0.0f && p->point[el->v[1]].w > 0.0f &&
+		    p->point[el->v[2]].w > 0.0f) {
+			squeezed = e;
+			p->point[el->v[1]].x = p->point[el->v[2]].x = p->point[el->v[0]].x;
+		}
+	}
+	cr_assert(squeezed >= 0);
+	plait_mesh_contacts_fit_boxes(sim, mc, false, 0.0f);
+	int triangles = 0;
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		if (el->size != 3) {
+			continue;
+		}
+		vec3 t[3] = {p->point[el->v[0]].x, p->point[el->v[1]].x, p->point[el->v[2]].x};
+		vec3 want = plait_triangle_normal(t), got = mc->shapes[e].normal;
+		cr_assert(memcmp(&want, &got, sizeof want) == 0,
+		          "element %d: normal (%.9g %.9g %.9g), want (%.9g %.9g %.9g)", e, (double)got.x,
+		          (double)got.y, (double)got.z, (double)want.x, (double)want.y, (double)want.z);
+		triangles += 1;
+	}
+	vec3 zero = v3(0.0f, 0.0f, 0.0f);
+	cr_expect(memcmp(&mc->shapes[squeezed].normal, &zero, sizeof zero) == 0);
+	cr_expect_gt(triangles, 1000, "only %d triangles", triangles);
+	collide_scene_destroy(&scene);
+}
+
 Test(collide, a_sheet_thrown_at_20_m_per_s_onto_a_1_mm_box_does_not_pass_through)
 {
 	scene_totals t = run_scene(SCENE_THIN_BOX, 16, 0, NULL);
