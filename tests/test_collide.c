@@ -217,8 +217,8 @@ Test(collide, a_mending_passes_over_pairs_within_a_patch_that_kept_flat)
 
 /* The gather's element normals, four triangles at a time in SSE2 lanes where there are lanes
  * (mesh_contact_listing.c, fit_normals_range), are plait_triangle_normal's to the bit, a
- * collapsed triangle's zero included: a draping sheet's and the sphere mesh's, after a few
- * frames, one triangle squeezed to a point. */
+ * collapsed triangle's zero included, and its spreads their scalar roots: a draping sheet's and
+ * the sphere mesh's, after a few frames, one triangle squeezed to a point. */
 Test(collide, element_normals_are_the_triangles_own)
 {
 	collide_scene_options options = collide_scene_default_options();
@@ -256,6 +256,26 @@ Test(collide, element_normals_are_the_triangles_own)
 		          "element %d: normal (%.9g %.9g %.9g), want (%.9g %.9g %.9g)", e, (double)got.x,
 		          (double)got.y, (double)got.z, (double)want.x, (double)want.y, (double)want.z);
 		triangles += 1;
+	}
+	/* And each element's spread, the largest distance of its vertices' motions from their mean
+	 * (its square root taken four at a time too). */
+	float since = (float)(mc->substep_serial - mc->gather_serial);
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		vec3 motion[3], mean = v3(0.0f, 0.0f, 0.0f);
+		for (int k = 0; k < el->size; ++k) {
+			int i = el->v[k];
+			motion[k] = mc->path_end[i] >= since ? mc->motion[i] : v3(0.0f, 0.0f, 0.0f);
+			mean = k == 0 ? motion[0] : v3_add(mean, motion[k]);
+		}
+		mean = v3_scale(mean, 1.0f / (float)el->size);
+		float spread_sq = 0.0f;
+		for (int k = 0; k < el->size; ++k) {
+			vec3 d = v3_sub(motion[k], mean);
+			spread_sq = plait_maxf(spread_sq, v3_dot(d, d));
+		}
+		cr_assert_eq(mc->element_spread[e], sqrtf(spread_sq), "element %d: spread %.9g, want %.9g", e,
+		             (double)mc->element_spread[e], (double)sqrtf(spread_sq));
 	}
 	vec3 zero = v3(0.0f, 0.0f, 0.0f);
 	cr_expect(memcmp(&mc->shapes[squeezed].normal, &zero, sizeof zero) == 0);

@@ -149,7 +149,7 @@ static void fit_box_range(void *context, int begin, int end)
 				spread_sq = plait_maxf(spread_sq, v3_dot(d, d));
 			}
 			mc->element_motion[e] = mean;
-			mc->element_spread[e] = sqrtf(spread_sq);
+			mc->element_spread[e] = spread_sq; /* its root below, four at a time */
 		}
 		for (int k = 0; k < el->size; ++k) {
 			int i = el->v[k];
@@ -191,6 +191,20 @@ static void fit_box_range(void *context, int begin, int end)
 		}
 		mc->lower[e] = v3_sub(lower, v3(g, g, g));
 		mc->upper[e] = v3_add(upper, v3(g, g, g));
+	}
+	if (!paths) {
+		/* The spreads' square roots apart from the loop above, whose every element waited on
+		 * its own (a fifth of the loop's time): the same roots, correctly rounded either way. */
+		float *spread = mc->element_spread;
+		int e = begin;
+#if defined(PLAIT_HAVE_LANES)
+		for (; e + 4 <= end; e += 4) {
+			_mm_storeu_ps(spread + e, _mm_sqrt_ps(_mm_loadu_ps(spread + e)));
+		}
+#endif
+		for (; e < end; ++e) {
+			spread[e] = sqrtf(spread[e]);
+		}
 	}
 }
 
