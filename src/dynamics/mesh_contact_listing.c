@@ -635,6 +635,18 @@ static void holds_range(void *context, int begin, int end)
 	atomic_fetch_add_explicit(&job->movable, movable, memory_order_relaxed);
 }
 
+/* The vertices out of their guards (holds_range), flagged in strayed and counted (those newly
+ * flagged). */
+static int count_strays(plait_sim *sim, const plait_mesh_contacts *mc, uint8_t *strayed, long since)
+{
+	holds_job job = {.sim = sim, .mc = mc, .strayed = strayed, .since = since};
+	atomic_init(&job.strays, 0);
+	atomic_init(&job.movable, 0);
+	atomic_init(&job.out, 0);
+	plait_parallel_for(&sim->parallel, holds_range, &job, 0, sim->particles.count, HOLDS_GRAIN);
+	return atomic_load_explicit(&job.strays, memory_order_relaxed);
+}
+
 static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
 {
 	mc->paths_kept = false;
@@ -646,7 +658,21 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 		return false;
 	}
 	const plait_particles *p = &sim->particles;
+	/* A short list past its own substep is gathered again whatever this finds; only whether
+	 * the paths were kept (few strays) is asked. When the vertices out of their guards are
+	 * already too many for that, the cloth edges' bounds, which could only add strays, are not
+	 * measured (a falling cloth's hold test spent half its time there). */
+	bool answered = mc->list_serves == 0 && since >= 1 && strayed != NULL;
 	int strays = 0;
+	if (answered) {
+		strays = count_strays(sim, mc, strayed, since);
+		if (strays > 0 && !plait_mesh_contacts_few_strays(strays, p->count)) {
+			if (stray_count != NULL) {
+				*stray_count = strays;
+			}
+			return false;
+		}
+	}
 	if (mc->features != NULL && !plait_mesh_contacts_cloth_edges_within_bounds(sim, mc)) {
 		/* D of the colliders' corners and edges left out no longer holds for some elements:
 		 * their vertices (and their neighbours', whose D reads their bound) strayed too. */
@@ -655,16 +681,20 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 		}
 		strays += plait_mesh_contacts_mark_outgrown(sim, mc, strayed);
 	}
-	/* Each vertex alone, on the workers; the count is a sum, the same in any order. */
+	/* Each vertex alone, on the workers; the count is a sum, the same in any order. (Counted
+	 * above already for a short list past its substep: the outgrown edges' vertices marked
+	 * since are newly flagged ones, and the two counts are of different vertices.) */
 	holds_job job = {.sim = sim, .mc = mc, .strayed = strayed, .since = since};
 	atomic_init(&job.strays, 0);
 	atomic_init(&job.movable, 0);
 	atomic_init(&job.out, 0);
-	plait_parallel_for(&sim->parallel, holds_range, &job, 0, p->count, HOLDS_GRAIN);
-	if (atomic_load_explicit(&job.out, memory_order_relaxed)) {
-		return false;
+	if (!answered) {
+		plait_parallel_for(&sim->parallel, holds_range, &job, 0, p->count, HOLDS_GRAIN);
+		if (atomic_load_explicit(&job.out, memory_order_relaxed)) {
+			return false;
+		}
+		strays += atomic_load_explicit(&job.strays, memory_order_relaxed);
 	}
-	strays += atomic_load_explicit(&job.strays, memory_order_relaxed);
 	if (stray_count != NULL) {
 		*stray_count = strays;
 	}
