@@ -341,7 +341,8 @@ typedef struct plait_collider_def {
 	plait_vec3 rotation_deg;   /* box: orientation */
 	plait_mesh_def mesh;       /* mesh: vertices and faces in the collider's own space */
 	bool deforming;            /* mesh: its vertices move too, set frame by frame with
-	                            * plait_collider_set_mesh_positions (false) */
+	                            * plait_collider_set_mesh_positions (false); costs more than
+	                            * a rigid mesh moved by its transform (docs/scene-format.md) */
 	plait_transform transform; /* initial keyframe transform (identity) */
 	plait_surface_def surface;
 } plait_collider_def;
