@@ -643,8 +643,8 @@ Test(collide, a_tube_over_a_bending_mesh_arm_never_crosses_itself_or_the_arm)
 
 /* The sleeve over one closed mesh of the whole arm whose vertices bend at the elbow frame by
  * frame, as a skinned character's do (a deforming mesh collider; collide_scenes.c, bend_arm):
- * the surface swept in time inside each substep. Clean from 32 of 32 nearby starts at n = 14
- * and 16 (performance.md, session 29). */
+ * the surface swept in time inside each substep. Clean from 68 of 68 nearby starts at n = 12
+ * to 20 (performance.md, session 29). */
 Test(collide, a_tube_over_a_skinned_arm_that_bends_never_crosses_itself_or_the_arm)
 {
 	collide_scene_options options = collide_scene_default_options();
