@@ -27,6 +27,8 @@
  *                      [--coarse-floor] (pile: onto a coarse sheet of 3 x 3 vertices)
  *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
  *                      [--sphere-slices S] (hang-self: the sphere mesh's slices and stacks, 50)
+ *                      [--window FIRST LAST] (also the mean ms and collision ms a frame over
+ *                       frames FIRST to LAST, e.g. hang-self --stiff falling free: 2 12)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
  *                      [--per-frame] (a line per frame: its ms, collision ms and counters, and
  *                      the kinetic energy and largest strain at its end, measured untimed)
@@ -65,6 +67,8 @@ static int compare_doubles(const void *a, const void *b)
 
 typedef struct run_result {
 	double ms, first_ms, collision_ms;
+	double window_ms, window_collision_ms; /* means over the frames of --window */
+	int window_frames;
 	uint64_t state; /* FNV-1a over the cloths' final positions' bits */
 	int worst_crossings, crossing_frames, worst_inside, worst_in_round, ccd_hits, failsafe, order_violations;
 	int frames;
@@ -73,8 +77,13 @@ typedef struct run_result {
 	bool failed;
 } run_result;
 
+/* Frames [first, last] (from 1) whose means run_result gives apart (first 0: none). */
+typedef struct frame_window {
+	int first, last;
+} frame_window;
+
 static run_result run(collide_scene_kind kind, int n, int frames, int threads, bool check, bool verbose,
-                      bool per_frame, const collide_scene_options *options)
+                      bool per_frame, frame_window window, const collide_scene_options *options)
 {
 	run_result r = {0};
 	plait_world_def def = plait_default_world_def();
@@ -115,6 +124,11 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 			       stats.failsafe, stats.kinetic_energy, stats.max_strain);
 		}
 		r.collision_ms += stats.collision_ms;
+		if (window.first > 0 && f + 1 >= window.first && f + 1 <= window.last) {
+			r.window_ms += 1e3 * frame_seconds;
+			r.window_collision_ms += stats.collision_ms;
+			r.window_frames += 1;
+		}
 		r.ccd_hits += stats.ccd_hits;
 		r.failsafe += stats.failsafe;
 		int kept, left_out;
@@ -143,6 +157,10 @@ static run_result run(collide_scene_kind kind, int n, int frames, int threads, b
 	}
 	r.ms = 1e3 * stepping / r.frames;
 	r.collision_ms /= r.frames;
+	if (r.window_frames > 0) {
+		r.window_ms /= r.window_frames;
+		r.window_collision_ms /= r.window_frames;
+	}
 	r.order_violations = collide_scene_order_violations(&scene);
 	plait_mesh_contacts_flat_counts(&scene.world.world->sim, &r.culled, &r.unflattened);
 	r.state = 1469598103934665603ull;
@@ -170,6 +188,7 @@ int main(int argc, char **argv)
 {
 	bool chosen[SCENE_COUNT] = {false}, any = false, check = true, verbose = false, per_frame = false;
 	int n = 0, frames = 0, runs = 1, threads = 1, variants = 1;
+	frame_window window = {0, 0};
 	collide_scene_options options = collide_scene_default_options();
 	for (int a = 1; a < argc; ++a) {
 		if (strcmp(argv[a], "--n") == 0 && a + 1 < argc) {
@@ -208,6 +227,13 @@ int main(int argc, char **argv)
 			verbose = true;
 		} else if (strcmp(argv[a], "--per-frame") == 0) {
 			per_frame = true;
+		} else if (strcmp(argv[a], "--window") == 0 && a + 2 < argc) {
+			window.first = atoi(argv[++a]);
+			window.last = atoi(argv[++a]);
+			if (window.first < 1 || window.last < window.first) {
+				fprintf(stderr, "bench_collide: --window takes two frames, 1 <= first <= last\n");
+				return 2;
+			}
 		} else if (strcmp(argv[a], "--variants") == 0 && a + 1 < argc) {
 			variants = atoi(argv[++a]);
 		} else {
@@ -223,7 +249,7 @@ int main(int argc, char **argv)
 				        "[--coarse-floor] [--substeps S] "
 				        "[--sphere-slices S] "
 				        "[--verbose] "
-				        "[--per-frame] [--variants K]\n"
+				        "[--per-frame] [--window FIRST LAST] [--variants K]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}
@@ -250,7 +276,8 @@ int main(int argc, char **argv)
 			options.variant = v;
 			run_result last = {0};
 			for (int r = 0; r < runs; ++r) {
-				last = run((collide_scene_kind)k, n, frames, threads, check, verbose, per_frame, &options);
+				last = run((collide_scene_kind)k, n, frames, threads, check, verbose, per_frame, window,
+				           &options);
 				ms[r] = last.ms;
 			}
 			qsort(ms, (size_t)runs, sizeof(double), compare_doubles);
@@ -263,6 +290,10 @@ int main(int argc, char **argv)
 			       last.order_violations, last.ccd_hits, last.failsafe, last.features_kept / last.frames,
 			       (last.features_kept + last.features_left_out) / last.frames, last.unflattened, last.culled,
 			       last.first_ms, (unsigned long long)last.state);
+			if (last.window_frames > 0) {
+				printf(" window=%d-%d window_ms=%.2f window_collision_ms=%.2f", window.first,
+				       window.first + last.window_frames - 1, last.window_ms, last.window_collision_ms);
+			}
 			if (variants > 1) {
 				printf(" variant=%d", v);
 			}
