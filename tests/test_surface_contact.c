@@ -175,3 +175,218 @@ Test(surface_contact, a_cloth_folded_over_itself_keeps_its_layers_apart)
 	cr_assert_lt(without, 0.004, "without self-collision the layers should meet or pass (%g)", without);
 	cr_assert_geq(with, 0.008 - 0.002, "with self-collision the layers sit two thicknesses apart (%g)", with);
 }
+
+/* ---- Bounce and stickiness between objects (mesh contacts) ----------------------------------- */
+
+/* A 1 m sheet lying at y = 0 with every vertex pinned: a surface that does not give way. */
+static plait_object_id add_pinned_sheet(plait_world_id world, float bounce, float stickiness)
+{
+	test_grid grid = test_grid_make(5, 5, 1.0f, 1.0f);
+	int *pins = malloc(sizeof(int) * (size_t)grid.vertex_count);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].y = 0.0f;
+		pins[i] = i;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.pins = pins;
+	def.pin_count = grid.vertex_count;
+	def.surface.thickness = 0.005f;
+	def.surface.bounce = bounce;
+	def.surface.stickiness = stickiness;
+	plait_error error;
+	plait_object_id id = plait_create_cloth(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(id), "%s", error.message);
+	free(pins);
+	test_grid_free(&grid);
+	return id;
+}
+
+static plait_world_id bare_world(void)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	cr_assert(!plait_world_id_is_null(world));
+	return world;
+}
+
+/* One particle (radius 1 cm) with the given surface, at `height`, still. */
+static plait_object_id add_particle(plait_world_id world, float height, float bounce, float stickiness)
+{
+	plait_vec3 x = {0.1f, height, 0.15f};
+	plait_particles_def def = plait_default_particles_def();
+	def.positions = &x;
+	def.count = 1;
+	def.radius = 0.01f;
+	def.surface.bounce = bounce;
+	def.surface.stickiness = stickiness;
+	plait_object_id id = plait_create_particles(world, &def, NULL);
+	cr_assert(!plait_object_id_is_null(id));
+	return id;
+}
+
+/* The height a particle dropped from 0.5 m climbs back to after its first landing, over the
+ * level it landed at (metres), on a pinned cloth or on a ground plane of the same surface. */
+static float rebound(bool on_cloth, float bounce)
+{
+	plait_world_id world = bare_world();
+	float level;
+	if (on_cloth) {
+		add_pinned_sheet(world, bounce, 0.0f);
+		level = 0.005f + 0.01f;
+	} else {
+		plait_collider_def ground = plait_default_collider_def();
+		ground.surface.bounce = bounce;
+		ground.surface.thickness = 0.005f;
+		cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, NULL)));
+		level = 0.005f + 0.01f;
+	}
+	plait_object_id dot = add_particle(world, 0.5f + level, bounce, 0.0f);
+	float lowest = 1e9f, highest_after = -1e9f;
+	bool landed = false;
+	for (int frame = 0; frame < 40; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_vec3 x, v;
+		plait_object_get_positions(dot, 0, 1, &x, NULL);
+		plait_object_get_velocities(dot, 0, 1, &v, NULL);
+		cr_assert_geq(x.y, level - 2e-3f, "the particle went into the surface: y = %g", (double)x.y);
+		lowest = fminf(lowest, x.y);
+		/* Landed: at rest on the surface, or going up again (a frame is longer than a bounce). */
+		landed = landed || x.y < level + 1e-3f || v.y > 0.0f;
+		if (landed) {
+			highest_after = fmaxf(highest_after, x.y);
+		}
+		/* Stop at the top of the first rebound, before it lands again. */
+		if (landed && v.y < 0.0f) {
+			break;
+		}
+	}
+	cr_assert(landed, "the particle never reached the surface (lowest y = %g)", (double)lowest);
+	plait_destroy_world(world);
+	return highest_after - level;
+}
+
+Test(surface_contact, a_particle_bounces_off_a_cloth_as_its_bounce_asks_and_as_off_a_collider)
+{
+	/* From 0.5 m a perfectly elastic landing climbs back 0.5 m and one at restitution e climbs
+	 * e^2 of it; the substeps' positions lose some. Before cloth contacts had bounce, every
+	 * landing on a cloth was inelastic: 0 for all three. */
+	float asked[3] = {0.0f, 0.5f, 1.0f};
+	float low[3] = {0.0f, 0.07f, 0.35f}, high[3] = {0.01f, 0.2f, 0.505f};
+	for (int k = 0; k < 3; ++k) {
+		float cloth = rebound(true, asked[k]), ground = rebound(false, asked[k]);
+		cr_log_info("bounce %g: rebound %.4f m off the cloth, %.4f m off the ground", (double)asked[k],
+		            (double)cloth, (double)ground);
+		cr_expect(cloth >= low[k] && cloth <= high[k], "bounce %g: rebound %g m off the cloth, want %g..%g",
+		          (double)asked[k], (double)cloth, (double)low[k], (double)high[k]);
+		cr_expect(ground >= low[k] && ground <= high[k],
+		          "bounce %g: rebound %g m off the ground, want %g..%g", (double)asked[k], (double)ground,
+		          (double)low[k], (double)high[k]);
+		cr_expect(fabsf(cloth - ground) <= 0.25f * ground + 0.01f,
+		          "bounce %g: %g m off the cloth against %g m off the ground", (double)asked[k],
+		          (double)cloth, (double)ground);
+	}
+}
+
+/* The highest mean height a 0.4 m sheet dropped from 0.3 m onto a pinned one climbs back to
+ * after it lands, over the level it lands at (metres). */
+static float cloth_rebound(float bounce)
+{
+	plait_world_id world = bare_world();
+	add_pinned_sheet(world, bounce, 0.0f);
+	test_grid grid = test_grid_make(5, 5, 0.4f, 0.4f);
+	for (int i = 0; i < grid.vertex_count; ++i) {
+		grid.positions[i].y = 0.3f;
+	}
+	plait_cloth_def def = plait_default_cloth_def();
+	def.mesh = test_grid_mesh(&grid);
+	def.surface.thickness = 0.005f;
+	def.surface.bounce = bounce;
+	plait_object_id upper = plait_create_cloth(world, &def, NULL);
+	cr_assert(!plait_object_id_is_null(upper));
+	int n = grid.vertex_count;
+	test_grid_free(&grid);
+	plait_vec3 *x = malloc(sizeof *x * (size_t)n);
+	float level = 0.01f, highest_after = -1e9f;
+	bool landed = false;
+	for (int frame = 0; frame < 36; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_object_get_positions(upper, 0, n, x, NULL);
+		float mean = 0.0f;
+		for (int i = 0; i < n; ++i) {
+			cr_assert_geq(x[i].y, level - 2e-3f, "frame %d: vertex %d went through the pinned cloth", frame,
+			              i);
+			mean += x[i].y / (float)n;
+		}
+		landed = landed || mean < level + 0.01f;
+		if (landed) {
+			highest_after = fmaxf(highest_after, mean);
+		}
+	}
+	cr_assert(landed, "the sheet never landed");
+	free(x);
+	plait_destroy_world(world);
+	return highest_after - level;
+}
+
+Test(surface_contact, a_cloth_dropped_on_a_cloth_bounces_back_as_its_bounce_asks)
+{
+	/* Its vertices land together, so it leaves nearly whole: a perfectly elastic landing
+	 * climbs most of the way back, an inelastic one stays down. */
+	float elastic = cloth_rebound(1.0f), inelastic = cloth_rebound(0.0f);
+	cr_log_info("the sheet climbed back %.4f m at bounce 1, %.4f m at 0", (double)elastic, (double)inelastic);
+	cr_expect_geq(elastic, 0.15f, "bounce 1: the sheet climbed back %g m of 0.29 m", (double)elastic);
+	cr_expect_leq(elastic, 0.29f, "bounce 1: the sheet climbed back %g m of 0.29 m (energy made)",
+	              (double)elastic);
+	cr_expect_leq(inelastic, 0.01f, "bounce 0: the sheet climbed back %g m", (double)inelastic);
+}
+
+/* How far a particle resting on a surface (a pinned cloth or the ground) rises after a kick of
+ * 1 m/s straight up, both surfaces with the given stickiness (metres). */
+static float rise_after_kick(bool on_cloth, float stickiness)
+{
+	plait_world_id world = bare_world();
+	float level = 0.005f + 0.01f;
+	if (on_cloth) {
+		add_pinned_sheet(world, 0.0f, stickiness);
+	} else {
+		plait_collider_def ground = plait_default_collider_def();
+		ground.surface.stickiness = stickiness;
+		ground.surface.thickness = 0.005f;
+		cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, NULL)));
+	}
+	plait_object_id dot = add_particle(world, level + 0.002f, 0.0f, stickiness);
+	cr_assert(test_step_frames(world, 12));
+	plait_vec3 x, kick = {0.0f, 1.0f, 0.0f};
+	plait_object_get_positions(dot, 0, 1, &x, NULL);
+	cr_assert(fabsf(x.y - level) < 1e-3f, "the particle rests at y = %g, not on the surface at %g",
+	          (double)x.y, (double)level);
+	cr_assert_eq(plait_object_set_velocities(dot, 0, 1, &kick, NULL), PLAIT_OK);
+	float highest = x.y;
+	for (int frame = 0; frame < 12; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		plait_object_get_positions(dot, 0, 1, &x, NULL);
+		highest = fmaxf(highest, x.y);
+	}
+	plait_destroy_world(world);
+	return highest - level;
+}
+
+Test(surface_contact, stickiness_keeps_a_kicked_particle_on_a_cloth_as_on_a_collider)
+{
+	/* Unstuck, 1 m/s climbs 5.1 cm. Fully sticky, the first substep's rise (1 m/s over a
+	 * substep of 1/72 s: 1.4 cm) is about all it gets: its separating speed is taken away while
+	 * it still touches. Before cloth contacts had stickiness: 4.9 cm off the cloth. */
+	float free_rise = rise_after_kick(true, 0.0f), stuck_rise = rise_after_kick(true, 1.0f);
+	float ground_free = rise_after_kick(false, 0.0f), ground_stuck = rise_after_kick(false, 1.0f);
+	cr_log_info("kicked: rose %.4f m unstuck and %.4f m at stickiness 1 off a cloth, %.4f and %.4f off the "
+	            "ground",
+	            (double)free_rise, (double)stuck_rise, (double)ground_free, (double)ground_stuck);
+	cr_expect_geq(free_rise, 0.04f, "stickiness 0: rose %g m off the cloth", (double)free_rise);
+	cr_expect_leq(stuck_rise, 0.015f, "stickiness 1: rose %g m off the cloth", (double)stuck_rise);
+	cr_expect_leq(ground_stuck, 0.015f, "stickiness 1: rose %g m off the ground", (double)ground_stuck);
+	cr_expect(fabsf(stuck_rise - ground_stuck) <= 2e-3f,
+	          "stickiness 1: rose %g m off the cloth, %g m off the ground", (double)stuck_rise,
+	          (double)ground_stuck);
+}

@@ -338,7 +338,10 @@ static plait_world_id pooled_world(int worker_count, int substeps, plait_thread_
 	return world;
 }
 
-static plait_vec3 *drape_positions(int worker_count, int *count)
+/* A self-colliding cloth with 64 particles dropped on it, over a sphere and the ground; with
+ * `bouncy`, the cloth and particles bounce and stick to each other (mesh contacts' restitution,
+ * a pass after the velocities). */
+static plait_vec3 *drape_positions(int worker_count, bool bouncy, int *count)
 {
 	plait_thread_pool *pool;
 	plait_world_id world = pooled_world(worker_count, 0, &pool);
@@ -351,6 +354,8 @@ static plait_vec3 *drape_positions(int worker_count, int *count)
 	cloth.mesh = test_grid_mesh(&grid);
 	cloth.self_collide = true;
 	cloth.surface.friction = 0.3f;
+	cloth.surface.bounce = bouncy ? 0.6f : 0.0f;
+	cloth.surface.stickiness = bouncy ? 0.3f : 0.0f;
 	plait_object_id cloth_id = plait_create_cloth(world, &cloth, &error);
 	cr_assert(!plait_object_id_is_null(cloth_id), "%s", error.message);
 
@@ -361,6 +366,7 @@ static plait_vec3 *drape_positions(int worker_count, int *count)
 	particles.positions = drops;
 	particles.count = 64;
 	particles.radius = 0.03f;
+	particles.surface.bounce = bouncy ? 0.9f : 0.0f;
 	plait_object_id particles_id = plait_create_particles(world, &particles, &error);
 	cr_assert(!plait_object_id_is_null(particles_id), "%s", error.message);
 
@@ -388,9 +394,9 @@ static plait_vec3 *drape_positions(int worker_count, int *count)
 Test(threads, same_positions_with_1_2_and_8_workers, .timeout = 600)
 {
 	int count1, count2, count8;
-	plait_vec3 *x1 = drape_positions(1, &count1);
-	plait_vec3 *x2 = drape_positions(2, &count2);
-	plait_vec3 *x8 = drape_positions(8, &count8);
+	plait_vec3 *x1 = drape_positions(1, false, &count1);
+	plait_vec3 *x2 = drape_positions(2, false, &count2);
+	plait_vec3 *x8 = drape_positions(8, false, &count8);
 	cr_assert_eq(count1, count2);
 	cr_assert_eq(count1, count8);
 	cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0, "2 workers give other positions than 1");
@@ -398,6 +404,17 @@ Test(threads, same_positions_with_1_2_and_8_workers, .timeout = 600)
 	free(x1);
 	free(x2);
 	free(x8);
+}
+
+Test(threads, bouncing_and_sticking_contacts_give_the_same_positions_with_1_and_2_workers, .timeout = 600)
+{
+	int count1, count2;
+	plait_vec3 *x1 = drape_positions(1, true, &count1);
+	plait_vec3 *x2 = drape_positions(2, true, &count2);
+	cr_assert_eq(count1, count2);
+	cr_expect(memcmp(x1, x2, sizeof *x1 * (size_t)count1) == 0, "2 workers give other positions than 1");
+	free(x1);
+	free(x2);
 }
 
 /* A cloth tethered to three pins (rows of three tethers per vertex, solved exactly, which

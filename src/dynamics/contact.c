@@ -1375,6 +1375,7 @@ void plait_contacts_end_substep(plait_sim *sim)
 		p->v[i] = v3_mul_add(p->v[i], -p->point[i].w, impulse);
 		p->v[j] = v3_mul_add(p->v[j], p->point[j].w, impulse);
 	}
+	plait_mesh_contacts_restitute(sim);
 }
 
 int plait_count_penetrations(const plait_sim *sim)

@@ -81,7 +81,8 @@ void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass);
  * (the failsafe sweeps again around them; indices needs room for every particle). */
 int plait_collide_listed_with_colliders(plait_sim *sim, int *indices, int *count, int *listed);
 
-/* Restitution on the particle-pair contacts of the substep (after v = (x - x_prev) / h). */
+/* Restitution on the particle-pair contacts of the substep (after v = (x - x_prev) / h), then
+ * bounce and stickiness on the mesh contacts (plait_mesh_contacts_restitute). */
 void plait_contacts_end_substep(plait_sim *sim);
 
 /* Below this approach speed (scene units / s) a contact rests rather than bounces. */

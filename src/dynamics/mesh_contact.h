@@ -39,6 +39,17 @@ int plait_mesh_contacts_project(plait_sim *sim);
 /* The end-of-substep guarantee; before the velocities are taken from the positions. */
 void plait_mesh_contacts_failsafe(plait_sim *sim);
 
+/* Whether some colliding object's surface asks for bounce or stickiness: the substep then ends
+ * with plait_mesh_contacts_restitute after its velocity update. */
+bool plait_mesh_contacts_restitution(const plait_sim *sim);
+
+/* After the substep's velocity update: each pair that pushed in it leaves at `bounce` times the
+ * normal speed it closed at (the mean of its two surfaces'; closing slower than gravity's pull
+ * over two substeps is resting, and does not bounce), and each pair that pushed or began the
+ * substep within its contact distance loses `stickiness` of its separating normal speed. In the
+ * list's order, on the calling thread. */
+void plait_mesh_contacts_restitute(plait_sim *sim);
+
 void plait_mesh_contacts_destroy(plait_sim *sim);
 
 /* Drops the list of candidates: the next substep gathers them again. For settings that change

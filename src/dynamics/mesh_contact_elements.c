@@ -343,6 +343,10 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->guard);
 	plait_free(a, mc->object_of);
 	plait_free(a, mc->around);
+	plait_free(a, mc->restitution_sum);
+	plait_free(a, mc->restitution_weight);
+	mc->restitution_sum = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
+	mc->restitution_weight = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
 	mc->x_gather = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->sweep_end = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
@@ -360,7 +364,8 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	if (mc->zone_parent == NULL || mc->touched == NULL || mc->members == NULL || mc->x_gather == NULL ||
 	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->path_lower == NULL ||
 	    mc->path_upper == NULL || mc->motion == NULL || mc->path_end == NULL || mc->guard == NULL ||
-	    mc->object_of == NULL || mc->around == NULL) {
+	    mc->object_of == NULL || mc->around == NULL || mc->restitution_sum == NULL ||
+	    mc->restitution_weight == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

@@ -120,8 +120,16 @@ typedef struct contact_pair {
 	int v[4];
 	uint8_t type;
 	uint8_t self;
+	/* Whether its two surfaces ask for bounce or stickiness (their means above 0), and
+	 * whether it pushed in this substep: plait_mesh_contacts_restitute, at the substep's end,
+	 * then sets its velocities, from `approach`, the relative normal velocity it had at the
+	 * substep's start along its normal at its first push (scene units per second, < 0 when
+	 * closing). */
+	uint8_t restitutes;
+	uint8_t pushed;
 	float distance; /* contact distance, scene units */
 	float friction;
+	float approach;
 	float side;     /* vertex-face: which side of the triangle's plane the vertex is on (+1, -1) */
 	vec3 direction; /* the others: unit vector from the second primitive to the first */
 	float scale[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
@@ -245,6 +253,11 @@ typedef struct plait_mesh_contacts {
 	int *near_start;
 	struct near_element *near_list;
 	bool active;
+	bool restitution; /* some object's surface asks for bounce or stickiness */
+	/* Per particle (scratch of plait_mesh_contacts_restitute, zero between): the velocity
+	 * changes its pairs ask of it, summed by its weight in each, and those weights. */
+	vec3 *restitution_sum;
+	float *restitution_weight;
 	bool gathered;   /* the candidates of this substep are ready */
 	bool list_valid; /* the list of the last gather may serve again (see plait_mesh_contacts_list_covers) */
 	int pair_count, pair_capacity;

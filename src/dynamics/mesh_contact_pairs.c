@@ -234,15 +234,19 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 	 * over their slots (rest_slots). */
 	vec3 start[4] = {{0}};
 	gather_points(p->x_prev, v, n, start);
-	contact_pair pair = {{v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
-	                     (uint8_t)type,
-	                     (uint8_t)self,
-	                     distance,
-	                     plait_combined_friction(first->friction, second->friction),
-	                     1.0f,
-	                     {0.0f, 1.0f, 0.0f},
-	                     {1.0f, 1.0f},
-	                     -1.0f};
+	contact_pair pair = {
+	    {v[0], v[1], n > 2 ? v[2] : v[1], n > 3 ? v[3] : v[1]},
+	    (uint8_t)type,
+	    (uint8_t)self,
+	    (uint8_t)(first->bounce + second->bounce > 0.0f || first->stickiness + second->stickiness > 0.0f),
+	    0,
+	    distance,
+	    plait_combined_friction(first->friction, second->friction),
+	    0.0f,
+	    1.0f,
+	    {0.0f, 1.0f, 0.0f},
+	    {1.0f, 1.0f},
+	    -1.0f};
 	/* The thickness between two primitives never exceeds their separation at the start frame
 	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
 	 * one object such pairs are rest pairs.) */

@@ -726,7 +726,8 @@ static plait_result run_substeps(plait_sim *sim, frame_job *frame, plait_error *
 			sim->collision_seconds += plait_seconds() - start;
 		}
 		/* The velocity update; with the next substep's start when nothing comes between. */
-		begun = s + 1 < substeps && !air && sim->pair_contact_count == 0;
+		begun =
+		    s + 1 < substeps && !air && sim->pair_contact_count == 0 && !plait_mesh_contacts_restitution(sim);
 		if (fold) {
 			/* The closing tethers and collisions in the same pass (folded_range). */
 			run_folded_close(sim, &job, &colliders, begun, begun ? (float)(s + 2) / (float)substeps : t1);
