@@ -157,7 +157,7 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 	// In this order: the collision counters follow contacts.
 	static const char *const keys[] = {"frame",        "ms",          "kinetic_energy", "max_strain",
 	                                   "penetrations", "nonfinite",   "contacts",       "ccd_hits",
-	                                   "failsafe",     "collision_ms"};
+	                                   "failsafe",     "tangles",     "collision_ms"};
 	int lines = 0;
 	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
 		json_error_t error;
@@ -180,6 +180,8 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 		cr_expect(json_is_number(json_object_get(json, "collision_ms")), "line %d: %s", lines, line);
 		cr_expect_geq(json_integer_value(json_object_get(json, "ccd_hits")), 0);
 		cr_expect_geq(json_integer_value(json_object_get(json, "failsafe")), 0);
+		cr_expect(json_is_integer(json_object_get(json, "tangles")), "line %d: %s", lines, line);
+		cr_expect_eq(json_integer_value(json_object_get(json, "tangles")), 0, "line %d: %s", lines, line);
 		cr_expect_geq(json_number_value(json_object_get(json, "collision_ms")), 0.0);
 		if (lines == 0) {
 			// Frame 0 is logged before any step.

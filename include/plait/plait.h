@@ -378,7 +378,9 @@ int plait_object_get_triangles(plait_object_id object, int *indices, int capacit
 int plait_object_get_faces(plait_object_id object, int *face_sizes, int *face_indices, int *index_count);
 
 /* Read or write positions (scene units) and velocities (scene units per second) of count
- * vertices starting at first. Writing moves the start state of the next frame. */
+ * vertices starting at first. Writing moves the start state of the next frame; positions set
+ * through other cloths (or a self-colliding cloth through itself) are found at the next substep
+ * and undone, as a scene that begins tangled is (plait_frame_stats.tangles). */
 plait_result plait_object_get_positions(plait_object_id object, int first, int count, plait_vec3 *out,
                                         plait_error *error);
 plait_result plait_object_set_positions(plait_object_id object, int first, int count,
@@ -425,6 +427,9 @@ typedef struct plait_frame_stats {
 	                        * between the primitives of meshes and curves */
 	int ccd_hits;          /* continuous tests that found primitives crossing within a substep */
 	int failsafe;          /* last-resort activations: impact zones made rigid, vertices frozen */
+	int tangles;           /* triangle edges found crossing other triangles at the substeps' starts
+	                        * (a state that began tangled, or positions set through each other),
+	                        * summed over the frame; pushed back through until none is left */
 	double collision_ms;   /* wall time spent in collisions (detection and response) in the frame */
 	int constraint_solves; /* constraint projections performed in the frame */
 } plait_frame_stats;

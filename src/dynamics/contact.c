@@ -145,7 +145,9 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 	if (!plait_mesh_contacts_prepare(sim, &sim->mesh_contacts_active)) {
 		return false;
 	}
-	plait_mesh_contacts_begin_substep(sim);
+	if (!plait_mesh_contacts_begin_substep(sim)) {
+		return false;
+	}
 
 	/* Particle pairs are needed when two colliding curves or particle objects hold particles, or
 	 * a particle object collides with itself. (Cloths meet everything through their triangles:

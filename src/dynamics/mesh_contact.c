@@ -34,6 +34,7 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		if (!plait_mesh_contacts_build_elements(sim, mc)) {
 			return false;
 		}
+		mc->tangle_check_due = true; /* objects came or went: they may begin tangled */
 		sim->mesh_contacts_dirty = false;
 	}
 	if (mc->active && !plait_mesh_contacts_reserve_particles(sim, mc)) {
@@ -91,6 +92,8 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->guard);
 	plait_free(a, mc->restitution_sum);
 	plait_free(a, mc->restitution_weight);
+	plait_free(a, mc->tangled);
+	plait_free(a, mc->tangle_pushes);
 	plait_free(a, mc->object_of);
 	plait_mesh_contacts_free_pieces(mc, a);
 	plait_mesh_contacts_free_plan(mc, a);
@@ -106,7 +109,7 @@ void plait_mesh_contacts_forget_list(plait_sim *sim)
 	}
 }
 
-void plait_mesh_contacts_begin_substep(plait_sim *sim)
+bool plait_mesh_contacts_begin_substep(plait_sim *sim)
 {
 	plait_mesh_contacts *mc = sim->mesh_contacts;
 	if (mc != NULL) {
@@ -116,6 +119,18 @@ void plait_mesh_contacts_begin_substep(plait_sim *sim)
 			plait_mesh_contacts_forget_rest_bounds(mc); /* positions may have been set between frames */
 			plait_mesh_contacts_check_plan(sim, mc);    /* and pins */
 		}
+		if (mc->active && mc->tangle_check_due && !plait_mesh_contacts_find_tangles(sim, mc)) {
+			return false;
+		}
+	}
+	return true;
+}
+
+void plait_mesh_contacts_positions_set(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc != NULL) {
+		mc->tangle_check_due = true;
 	}
 }
 
@@ -182,7 +197,7 @@ static float normal_speed(const plait_particles *p, const contact_pair *pair, co
  * friction removes relative tangential motion of the substep within friction times the push.
  * A pair whose surfaces bounce or stick notes its first push of the substep, with its approach
  * (v still holds the velocities of the substep's start). */
-static bool respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c)
+bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c)
 {
 	plait_particles *p = &sim->particles;
 	int count = pair_size[pair->type];
@@ -225,6 +240,11 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 {
 	plait_particles *p = &sim->particles;
 	int type = pair->type, n = pair_size[type];
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc != NULL && mc->tangle_count > 0 &&
+	    plait_mesh_contacts_pair_tangled(mc, type, pair->v, TANGLED_NOW)) {
+		return 0; /* where surfaces begin through each other, their start side is no truth */
+	}
 	vec3 x[4];
 	gather_current(p->point, pair->v, n, x);
 	float g[4];
@@ -325,7 +345,7 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 			g[1] = -1.0f;
 		}
 	}
-	return respond(sim, pair, g, normal, separation - pair->distance);
+	return plait_mesh_contacts_respond(sim, pair, g, normal, separation - pair->distance);
 }
 
 /* ---- Bounce and stickiness ------------------------------------------------------------------ */
@@ -514,5 +534,9 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		}
 		mc->gathered = true;
 	}
-	return plait_mesh_contacts_project_list(sim, mc);
+	int contacts = plait_mesh_contacts_project_list(sim, mc);
+	if (mc->tangle_push_count > 0) {
+		contacts += plait_mesh_contacts_push_through(sim, mc);
+	}
+	return contacts;
 }

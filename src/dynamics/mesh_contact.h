@@ -30,8 +30,14 @@
  * or went. False only when out of memory. */
 bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active);
 
-/* Starts a substep: the candidates are gathered at the first iteration. */
-void plait_mesh_contacts_begin_substep(plait_sim *sim);
+/* Starts a substep: the candidates are gathered at the first iteration. When a search for
+ * crossings is due (objects came, positions were set, crossings remained), triangles that cross
+ * at the substep's start are found and set about undoing (mesh_contact_untangle.c). False only
+ * when out of memory. */
+bool plait_mesh_contacts_begin_substep(plait_sim *sim);
+
+/* Positions were set from outside the solver: the next substep searches for crossings. */
+void plait_mesh_contacts_positions_set(plait_sim *sim);
 
 /* One collision iteration over the candidates; returns the contacts resolved. */
 int plait_mesh_contacts_project(plait_sim *sim);

@@ -345,6 +345,12 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->around);
 	plait_free(a, mc->restitution_sum);
 	plait_free(a, mc->restitution_weight);
+	plait_free(a, mc->tangled);
+	mc->tangled = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
+	mc->tangle_count = 0;
+	mc->tangle_push_count = 0;
+	mc->ever_tangled = false;
+	mc->tangle_check_due = true; /* particles came */
 	mc->restitution_sum = plait_alloc_zero(a, (size_t)count, sizeof(vec3));
 	mc->restitution_weight = plait_alloc_zero(a, (size_t)count, sizeof(float));
 	mc->around = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
@@ -365,7 +371,7 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->path_lower == NULL ||
 	    mc->path_upper == NULL || mc->motion == NULL || mc->path_end == NULL || mc->guard == NULL ||
 	    mc->object_of == NULL || mc->around == NULL || mc->restitution_sum == NULL ||
-	    mc->restitution_weight == NULL) {
+	    mc->restitution_weight == NULL || mc->tangled == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}

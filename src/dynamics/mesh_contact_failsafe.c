@@ -468,6 +468,9 @@ void plait_mesh_contacts_sweep_pair(pair_pass *pass, int type, const int *v)
 {
 	const plait_particles *p = &pass->sim->particles;
 	int n = pair_size[type];
+	if (pass->mc->tangle_count > 0 && plait_mesh_contacts_pair_tangled(pass->mc, type, v, TANGLED_NOW)) {
+		return; /* it began crossing, or beside a crossing: free to come undone */
+	}
 	vec3 start[4] = {{0}}, end[4] = {{0}};
 	gather_points(p->x_prev, v, n, start);
 	gather_current(p->point, v, n, end);
@@ -553,6 +556,12 @@ static void sweep_rest_range(void *context, int begin, int end)
 			rest_pair *pair = &job->mc->rest_pairs[k];
 			pair->lower -= group->pending; /* the motion the group took off for it */
 			int n = pair_size[pair->type];
+			if (mc->tangle_count > 0 &&
+			    plait_mesh_contacts_pair_tangled(mc, pair->type, pair->v, TANGLED_NOW)) {
+				pair->lower = -1.0f; /* unknown: measured when it is swept again */
+				lowest = -1.0f;
+				continue;
+			}
 			vec3 start[4] = {{0}}, end_points[4] = {{0}};
 			gather_points(p->x_prev, pair->v, n, start);
 			gather_current(p->point, pair->v, n, end_points);

@@ -9,6 +9,7 @@
  *   mesh_contact_pieces.c    the traversals cut into pieces, listed on the workers
  *   mesh_contact_failsafe.c  the end-of-substep failsafe: sweeps and impact zones
  *   mesh_contact_cross.c     cross patches: flat patches of a second tree, over the seams
+ *   mesh_contact_untangle.c  states that begin tangled: crossings found, and undone
  * A function one of them lends the others is named plait_mesh_contacts_ and what it was called
  * when they were one file; the rest stay static where they are used. */
 #ifndef PLAIT_DYNAMICS_MESH_CONTACT_INTERNAL_H
@@ -115,6 +116,16 @@ typedef struct element_shape {
 	vec3 centre;
 	vec3 normal; /* triangles: unit normal (zero when degenerate) */
 } element_shape;
+
+/* A vertex on the wrong side of a triangle it crossed into (mesh_contact_untangle.c): pushed
+ * to `side` of the triangle's plane (+1 along its winding's normal, -1 against), `distance`
+ * beyond it. */
+typedef struct tangle_push {
+	int vertex;
+	int target[3];
+	float side;
+	float distance;
+} tangle_push;
 
 typedef struct contact_pair {
 	int v[4];
@@ -254,6 +265,17 @@ typedef struct plait_mesh_contacts {
 	struct near_element *near_list;
 	bool active;
 	bool restitution; /* some object's surface asks for bounce or stickiness */
+	/* States that begin tangled (mesh_contact_untangle.c): whether triangles are searched for
+	 * crossings at the next substep's start, how many edge-triangle crossings the last search
+	 * found, per particle whether it is a vertex of one (tangled: no contact pushes it, the
+	 * failsafe does not sweep its pairs), and the pushes through that undo them. */
+	bool tangle_check_due;
+	bool was_tangled;  /* crossings were found and are not all undone yet */
+	bool ever_tangled; /* crossings were found since the stage had its particles */
+	int tangle_count;
+	uint8_t *tangled;
+	struct tangle_push *tangle_pushes;
+	int tangle_push_count, tangle_push_capacity;
 	/* Per particle (scratch of plait_mesh_contacts_restitute, zero between): the velocity
 	 * changes its pairs ask of it, summed by its weight in each, and those weights. */
 	vec3 *restitution_sum;
@@ -677,5 +699,30 @@ bool plait_mesh_contacts_gather_on_workers(plait_sim *sim, plait_mesh_contacts *
 void plait_mesh_contacts_sweep_pair(pair_pass *pass, int type, const int *v);
 /* Forgets the rest pairs' carried distance bounds (when positions were moved). */
 void plait_mesh_contacts_forget_rest_bounds(plait_mesh_contacts *mc);
+
+/* ---- mesh_contact.c ---- */
+
+/* Moves a pair's vertices so that its separation along n less its contact distance, c, becomes
+ * 0 (see respond there); false when none of them gives way. */
+bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c);
+
+/* ---- mesh_contact_untangle.c ---- */
+
+/* Searches the triangles at the substep's start (x_prev) for crossings; marks the tangled
+ * vertices and plans the pushes through. False only when out of memory. */
+bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc);
+
+/* The planned pushes through, at a collision iteration; returns how many moved vertices. */
+int plait_mesh_contacts_push_through(plait_sim *sim, plait_mesh_contacts *mc);
+
+/* mc->tangled: a vertex of a crossing found at this substep's start (TANGLED_NOW), or at any
+ * since the stage had its particles (TANGLED_EVER). */
+#define TANGLED_NOW 1u
+#define TANGLED_EVER 2u
+
+/* Whether both primitives of a pair of this type have a vertex tangled `when`: now (while
+ * mc->tangle_count > 0), neither pushed nor swept; ever, its start shape says nothing of it
+ * (not a rest pair, its contact distance not clipped to its start separation). */
+bool plait_mesh_contacts_pair_tangled(const plait_mesh_contacts *mc, int type, const int *v, uint8_t when);
 
 #endif

@@ -250,7 +250,9 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 	/* The thickness between two primitives never exceeds their separation at the start frame
 	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
 	 * one object such pairs are rest pairs.) */
-	if (distance > 0.0f && !self) {
+	const plait_mesh_contacts *mc = pass->mc;
+	if (distance > 0.0f && !self &&
+	    !(mc->ever_tangled && plait_mesh_contacts_pair_tangled(mc, type, v, TANGLED_EVER))) {
 		vec3 initial[4];
 		gather_points(p->x_start, v, n, initial);
 		/* The cheap bound first: most pairs of two objects started far apart. */
@@ -295,6 +297,10 @@ static void visit_primitives(pair_pass *pass, int type, const int *v, const plai
 	plait_particles *p = &sim->particles;
 	int first_count = type == PAIR_EDGE_EDGE ? 2 : 1;
 	if (pass->stage == STAGE_REST) {
+		if (mc->ever_tangled && plait_mesh_contacts_pair_tangled(mc, type, v, TANGLED_EVER)) {
+			pass->all_rest = false; /* it began crossing: its start distance is no rest */
+			return;
+		}
 		float distance = mean_radius(p, v, first_count) + mean_radius(p, v + first_count, n - first_count);
 		if (self) {
 			distance *= first->self_width_scale;

@@ -409,6 +409,7 @@ typedef struct plait_sim {
 	int constraint_solves;
 	int ccd_hits;
 	int failsafe;
+	int tangles; /* edge-triangle crossings found at substeps' starts (mesh_contact_untangle.c) */
 	double collision_seconds;
 } plait_sim;
 

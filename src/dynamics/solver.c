@@ -760,6 +760,7 @@ plait_result plait_sim_step(plait_sim *sim, plait_error *error)
 	sim->constraint_solves = 0;
 	sim->ccd_hits = 0;
 	sim->failsafe = 0;
+	sim->tangles = 0;
 	sim->collision_seconds = 0.0;
 
 	plait_tethers_begin_frame(&sim->tether, p, &sim->allocator);

@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "collision/mesh_shape.h"
+#include "dynamics/mesh_contact.h"
 #include "dynamics/sim_store.h"
 #include "world/world.h"
 
@@ -283,6 +284,7 @@ plait_result plait_object_set_positions(plait_object_id id, int first, int count
 			p->pin_end[i] = positions[k];
 		}
 	}
+	plait_mesh_contacts_positions_set(&id.world->sim); /* they may now cross */
 	return PLAIT_OK;
 }
 

@@ -264,6 +264,7 @@ plait_result plait_world_step(plait_world_id id, plait_error *error)
 	world->stats.contacts = world->sim.contacts;
 	world->stats.ccd_hits = world->sim.ccd_hits;
 	world->stats.failsafe = world->sim.failsafe;
+	world->stats.tangles = world->sim.tangles;
 	world->stats.collision_ms = 1e3 * world->sim.collision_seconds;
 	world->stats.constraint_solves = world->sim.constraint_solves;
 	return result;

@@ -29,7 +29,8 @@ bool plait_stats_log_write(plait_stats_log *log, int frame, double step_ms, cons
 	plait_json_number(f, stats->max_strain);
 	fprintf(f, ",\"penetrations\":%d,\"nonfinite\":%d,\"contacts\":%d", stats->penetrations, stats->nonfinite,
 	        stats->contacts);
-	fprintf(f, ",\"ccd_hits\":%d,\"failsafe\":%d,\"collision_ms\":", stats->ccd_hits, stats->failsafe);
+	fprintf(f, ",\"ccd_hits\":%d,\"failsafe\":%d,\"tangles\":%d,\"collision_ms\":", stats->ccd_hits,
+	        stats->failsafe, stats->tangles);
 	plait_json_number(f, stats->collision_ms);
 	if (check != NULL)
 		fprintf(f, ",\"intersections\":%d,\"inside_colliders\":%d", check->triangle_pairs,

@@ -1,0 +1,345 @@
+/* States that begin tangled (issue 3, seed 000 §4.4): cloth triangles that cross other cloth
+ * triangles, their own cloth's (when it self-collides) or a mesh or box collider's at a substep's
+ * start. Everything else in mesh contacts takes the substep's start to be free of crossings and
+ * keeps it so; a scene that begins tangled (layers modelled through each other, a garment put on
+ * through a body) would stay tangled for good, its contacts and failsafe pushing the tangled
+ * parts back to the wrong side at every substep.
+ *
+ * Found by a hierarchy over the triangles at the substep's start, when a check is due: at the
+ * first substep of the stage (objects came or went) and, while crossings remain, at every
+ * substep. Then:
+ *   - the vertices of crossing edges and triangles are *tangled*: a pair both of whose
+ *     primitives have a tangled vertex is neither pushed nor swept by the failsafe (Maya's self
+ *     trapped check: collisions step aside where surfaces already pass through each other, so
+ *     they do not hold them there). A tangled vertex still meets everything else: exempt from
+ *     every pair, a crumpling cloth passed through itself further from every crossing, each new
+ *     crossing freed more vertices, and a sheet tore itself into a million crossings;
+ *   - each cloth's edges that cross are cut from it, and the pieces it falls into are found
+ *     (union-find over its other edges): a piece cut off by crossings is the smaller of the two
+ *     on either side of a crossing edge (global intersection analysis after Baraff, Witkin and
+ *     Kass 2003), and the edge's end in it is pushed through the triangle it crosses, to the
+ *     other end's side. Substep after substep the crossing contour moves over the smaller
+ *     piece until it is gone. A crossing whose edge's ends stay in one piece (the contour
+ *     ends inside the cloth: the other surface's border lies within it) is left to the other
+ *     surface's edges, which it cuts. */
+#include "dynamics/mesh_contact_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "collision/intersect.h"
+#include "collision/mesh_shape.h"
+
+/* An edge of a triangle crossing another triangle at the substep's start. */
+typedef struct tangle_crossing {
+	int a, b;      /* the edge */
+	int target[3]; /* the triangle it crosses */
+	bool self;     /* within one object */
+} tangle_crossing;
+
+typedef struct tangle_pass {
+	const plait_sim *sim;
+	const plait_mesh_contacts *mc;
+	const plait_mesh_shape *shape;
+	int triangle;
+	tangle_crossing *crossings;
+	int count, capacity;
+	bool out_of_memory;
+} tangle_pass;
+
+static bool add_crossing(tangle_pass *pass, int a, int b, const int *target, bool self)
+{
+	if (pass->count == pass->capacity) {
+		int capacity = pass->capacity > 0 ? 2 * pass->capacity : 64;
+		tangle_crossing *bigger =
+		    plait_alloc_grow(&pass->sim->allocator, pass->crossings, sizeof *bigger, pass->count, capacity);
+		if (bigger == NULL) {
+			pass->out_of_memory = true;
+			return false;
+		}
+		pass->crossings = bigger;
+		pass->capacity = capacity;
+	}
+	pass->crossings[pass->count++] = (tangle_crossing){a, b, {target[0], target[1], target[2]}, self};
+	return true;
+}
+
+/* The edges of triangle t that cross triangle u, as crossings. */
+static void edges_through(tangle_pass *pass, const int *t, const int *u, bool self)
+{
+	const vec3 *x = pass->shape->positions;
+	for (int k = 0; k < 3; ++k) {
+		int a = t[k], b = t[(k + 1) % 3];
+		if (plait_segment_crosses_triangle(x[a], x[b], x[u[0]], x[u[1]], x[u[2]])) {
+			(void)add_crossing(pass, a, b, u, self);
+		}
+	}
+}
+
+static void visit_triangle_pair(int other, void *context)
+{
+	tangle_pass *pass = context;
+	if (other <= pass->triangle) {
+		return; /* each pair once */
+	}
+	const int *t = pass->shape->triangles[pass->triangle], *u = pass->shape->triangles[other];
+	for (int i = 0; i < 3; ++i) {
+		for (int j = 0; j < 3; ++j) {
+			if (t[i] == u[j]) {
+				return; /* neighbours touch by construction */
+			}
+		}
+	}
+	const plait_mesh_contacts *mc = pass->mc;
+	int ot = mc->object_of[t[0]], ou = mc->object_of[u[0]];
+	bool self = ot == ou;
+	if (self ? !mc->objects[ot].self
+	         : !plait_mesh_contacts_objects_meet(pass->sim, mc, ot < ou ? ot : ou, ot < ou ? ou : ot)) {
+		return;
+	}
+	edges_through(pass, t, u, self);
+	edges_through(pass, u, t, self);
+}
+
+static int find_root(int *parent, int i)
+{
+	while (parent[i] != i) {
+		parent[i] = parent[parent[i]];
+		i = parent[i];
+	}
+	return i;
+}
+
+static uint64_t edge_key(int a, int b)
+{
+	uint32_t low = (uint32_t)(a < b ? a : b), high = (uint32_t)(a < b ? b : a);
+	return ((uint64_t)low << 32) | high;
+}
+
+static int compare_keys(const void *a, const void *b)
+{
+	uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+	return x < y ? -1 : x > y;
+}
+
+static bool is_cut(const uint64_t *cut, int count, int a, int b)
+{
+	uint64_t key = edge_key(a, b);
+	return bsearch(&key, cut, (size_t)count, sizeof *cut, compare_keys) != NULL;
+}
+
+/* The pushes of the crossings: per cloth, its vertices joined along the edges that do not cross
+ * (union-find), and each crossing edge whose ends fall in different pieces pushes its end in the
+ * smaller piece (fewer vertices; the higher root on a tie) through to the other end's side. */
+static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_crossing *crossings, int count)
+{
+	const plait_allocator *a = &sim->allocator;
+	const plait_particles *p = &sim->particles;
+	int n = p->count;
+	int *parent = plait_alloc(a, sizeof(int) * (size_t)n);
+	int *size = plait_alloc_zero(a, (size_t)n, sizeof(int));
+	uint64_t *cut = plait_alloc(a, sizeof(uint64_t) * (size_t)count);
+	if (parent == NULL || size == NULL || cut == NULL) {
+		plait_free(a, parent);
+		plait_free(a, size);
+		plait_free(a, cut);
+		return false;
+	}
+	for (int k = 0; k < count; ++k) {
+		cut[k] = edge_key(crossings[k].a, crossings[k].b);
+	}
+	qsort(cut, (size_t)count, sizeof *cut, compare_keys);
+	for (int i = 0; i < n; ++i) {
+		parent[i] = i;
+	}
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		if (el->size != 3 || sim->materials[el->material].type == PLAIT_OBJECT_COLLIDER) {
+			continue;
+		}
+		for (int k = 0; k < 3; ++k) {
+			int u = el->v[k], w = el->v[(k + 1) % 3];
+			if (!is_cut(cut, count, u, w)) {
+				int ru = find_root(parent, u), rw = find_root(parent, w);
+				if (ru != rw) {
+					parent[ru > rw ? ru : rw] = ru < rw ? ru : rw;
+				}
+			}
+		}
+	}
+	for (int i = 0; i < n; ++i) {
+		size[find_root(parent, i)] += 1;
+	}
+	mc->tangle_push_count = 0;
+	bool ok = true;
+	for (int k = 0; k < count && ok; ++k) {
+		const tangle_crossing *c = &crossings[k];
+		int ra = find_root(parent, c->a), rb = find_root(parent, c->b);
+		if (ra == rb) {
+			continue;
+		}
+		bool a_smaller = size[ra] < size[rb] || (size[ra] == size[rb] && ra > rb);
+		int wrong = a_smaller ? c->a : c->b, right = a_smaller ? c->b : c->a;
+		if (!(p->point[wrong].w > 0.0f)) {
+			continue;
+		}
+		const vec3 *x = p->x_prev;
+		vec3 normal =
+		    v3_cross(v3_sub(x[c->target[1]], x[c->target[0]]), v3_sub(x[c->target[2]], x[c->target[0]]));
+		float side = v3_dot(v3_sub(x[right], x[c->target[0]]), normal) >= 0.0f ? 1.0f : -1.0f;
+		const plait_material *mv = &sim->materials[p->material[wrong]];
+		float distance = p->radius[wrong] +
+		                 (p->radius[c->target[0]] + p->radius[c->target[1]] + p->radius[c->target[2]]) / 3.0f;
+		if (c->self) {
+			distance *= mv->self_width_scale;
+		}
+		if (mc->tangle_push_count == mc->tangle_push_capacity) {
+			int capacity = mc->tangle_push_capacity > 0 ? 2 * mc->tangle_push_capacity : 64;
+			tangle_push *bigger =
+			    plait_alloc_grow(a, mc->tangle_pushes, sizeof *bigger, mc->tangle_push_count, capacity);
+			if (bigger == NULL) {
+				ok = false;
+				break;
+			}
+			mc->tangle_pushes = bigger;
+			mc->tangle_push_capacity = capacity;
+		}
+		mc->tangle_pushes[mc->tangle_push_count++] =
+		    (tangle_push){wrong, {c->target[0], c->target[1], c->target[2]}, side, distance};
+	}
+	plait_free(a, parent);
+	plait_free(a, size);
+	plait_free(a, cut);
+	return ok;
+}
+
+static bool cloth_triangle(const plait_sim *sim, const element *el)
+{
+	return el->size == 3 && sim->materials[el->material].type != PLAIT_OBJECT_COLLIDER;
+}
+
+bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_allocator *a = &sim->allocator;
+	const plait_particles *p = &sim->particles;
+	mc->tangle_check_due = false;
+	if (mc->tangle_count > 0) {
+		for (int i = 0; i < p->count; ++i) {
+			mc->tangled[i] &= (uint8_t)~TANGLED_NOW;
+		}
+	}
+	mc->tangle_count = 0;
+	mc->tangle_push_count = 0;
+	/* Cloth triangles only: crossings with colliders are the collider pass's. */
+	int triangles = 0;
+	for (int e = 0; e < mc->element_count; ++e) {
+		triangles += cloth_triangle(sim, &mc->elements[e]);
+	}
+	if (triangles < 2) {
+		return true;
+	}
+	int *sizes = plait_alloc(a, sizeof(int) * (size_t)triangles);
+	int *indices = plait_alloc(a, sizeof(int) * 3 * (size_t)triangles);
+	if (sizes == NULL || indices == NULL) {
+		plait_free(a, sizes);
+		plait_free(a, indices);
+		return false;
+	}
+	int t = 0;
+	for (int e = 0; e < mc->element_count; ++e) {
+		const element *el = &mc->elements[e];
+		if (cloth_triangle(sim, el)) {
+			sizes[t] = 3;
+			memcpy(indices + 3 * t++, el->v, sizeof el->v);
+		}
+	}
+	plait_mesh_def mesh = {(const plait_vec3 *)p->x_prev, p->count, sizes, triangles, indices};
+	plait_mesh_shape shape;
+	bool ok = plait_mesh_shape_build(&shape, a, &mesh, NULL) == PLAIT_OK;
+	plait_free(a, sizes);
+	plait_free(a, indices);
+	if (!ok) {
+		return false;
+	}
+	tangle_pass pass = {.sim = sim, .mc = mc, .shape = &shape};
+	for (int k = 0; k < shape.triangle_count && !pass.out_of_memory; ++k) {
+		const int *tri = shape.triangles[k];
+		vec3 lower =
+		    v3_min(shape.positions[tri[0]], v3_min(shape.positions[tri[1]], shape.positions[tri[2]]));
+		vec3 upper =
+		    v3_max(shape.positions[tri[0]], v3_max(shape.positions[tri[1]], shape.positions[tri[2]]));
+		pass.triangle = k;
+		plait_mesh_shape_visit(&shape, lower, upper, true, visit_triangle_pair, &pass);
+	}
+	plait_mesh_shape_destroy(&shape, a);
+	ok = !pass.out_of_memory;
+	if (ok && pass.count == 0 && mc->was_tangled) {
+		/* Undone. The stage is built again at the next substep: a cloth's own pairs that began
+		 * crossing were rest pairs (closer than their contact distance in the start shape),
+		 * never pushed; now they are not (plait_mesh_contacts_pair_tangled, ever). */
+		sim->mesh_contacts_dirty = true;
+		mc->was_tangled = false;
+	}
+	if (ok && pass.count > 0) {
+		for (int k = 0; k < pass.count; ++k) {
+			const tangle_crossing *c = &pass.crossings[k];
+			int v[5] = {c->a, c->b, c->target[0], c->target[1], c->target[2]};
+			for (int q = 0; q < 5; ++q) {
+				mc->tangled[v[q]] = TANGLED_NOW | TANGLED_EVER;
+			}
+		}
+		mc->tangle_count = pass.count;
+		mc->tangle_check_due = true; /* again at the next substep, until none is left */
+		mc->was_tangled = true;
+		mc->ever_tangled = true;
+		sim->tangles += pass.count;
+		ok = plan_pushes(sim, mc, pass.crossings, pass.count);
+	}
+	plait_free(a, pass.crossings);
+	return ok;
+}
+
+int plait_mesh_contacts_push_through(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	const plait_particles *p = &sim->particles;
+	int pushed = 0;
+	for (int k = 0; k < mc->tangle_push_count; ++k) {
+		const tangle_push *push = &mc->tangle_pushes[k];
+		vec3 x = p->point[push->vertex].x, t0 = p->point[push->target[0]].x, t1 = p->point[push->target[1]].x,
+		     t2 = p->point[push->target[2]].x;
+		vec3 face = v3_normalize(v3_cross(v3_sub(t1, t0), v3_sub(t2, t0)));
+		if (!(v3_length_sq(face) > 0.0f)) {
+			continue;
+		}
+		vec3 normal = v3_scale(face, push->side);
+		float along = v3_dot(v3_sub(x, t0), normal);
+		if (along >= push->distance) {
+			continue;
+		}
+		int region;
+		float weights[3];
+		(void)plait_closest_point_on_triangle(x, t0, t1, t2, &region, weights);
+		contact_pair pair = {.v = {push->vertex, push->target[0], push->target[1], push->target[2]},
+		                     .type = PAIR_VERTEX_FACE,
+		                     .scale = {1.0f, 1.0f}};
+		float g[4] = {1.0f, -weights[0], -weights[1], -weights[2]};
+		/* A contact distance at a time: all at once, a vertex a few centimetres on the wrong
+		 * side jumped through alone, and its sheet, stretched by 0.6, folded where it landed. */
+		float step = plait_maxf(along - push->distance, -push->distance);
+		pushed += plait_mesh_contacts_respond(sim, &pair, g, normal, step);
+	}
+	return pushed;
+}
+
+bool plait_mesh_contacts_pair_tangled(const plait_mesh_contacts *mc, int type, const int *v, uint8_t when)
+{
+	int first = type == PAIR_EDGE_EDGE ? 2 : 1, n = pair_size[type];
+	bool a = false, b = false;
+	for (int k = 0; k < first; ++k) {
+		a = a || (mc->tangled[v[k]] & when) != 0;
+	}
+	for (int k = first; k < n; ++k) {
+		b = b || (mc->tangled[v[k]] & when) != 0;
+	}
+	return a && b;
+}
