@@ -26,7 +26,13 @@ bool plait_mesh_contacts_prepare(plait_sim *sim, bool *active)
 		mc->element_flat_serial = -1;
 		mc->patches_fitted_for = -1;
 	}
-	if (sim->mesh_contacts_dirty) {
+	if (sim->mesh_contacts_dirty || mc->rebuild_untangled) {
+		if (sim->mesh_contacts_dirty && mc->tangled != NULL) {
+			/* Particles may have been renumbered: what was tangled is forgotten. */
+			memset(mc->tangled, 0, (size_t)mc->particle_capacity);
+			mc->ever_tangled = false;
+		}
+		mc->rebuild_untangled = false;
 		mc->list_valid = false;
 		mc->pair_count = 0;
 		mc->list_changes += 1;

@@ -270,8 +270,9 @@ typedef struct plait_mesh_contacts {
 	 * found, per particle whether it is a vertex of one (tangled: no contact pushes it, the
 	 * failsafe does not sweep its pairs), and the pushes through that undo them. */
 	bool tangle_check_due;
-	bool was_tangled;  /* crossings were found and are not all undone yet */
-	bool ever_tangled; /* crossings were found since the stage had its particles */
+	bool was_tangled;       /* crossings were found and are not all undone yet */
+	bool ever_tangled;      /* crossings were found since the stage had its particles */
+	bool rebuild_untangled; /* all were undone: the stage is built again (rest pairs) */
 	int tangle_count;
 	uint8_t *tangled;
 	struct tangle_push *tangle_pushes;

@@ -24,6 +24,7 @@
  *     surface's edges, which it cuts. */
 #include "dynamics/mesh_contact_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -41,6 +42,7 @@ typedef struct tangle_pass {
 	const plait_sim *sim;
 	const plait_mesh_contacts *mc;
 	const plait_mesh_shape *shape;
+	const uint8_t *own_edges; /* per soup triangle: the edges its element owns (bit k: v[k]-v[k+1]) */
 	int triangle;
 	tangle_crossing *crossings;
 	int count, capacity;
@@ -64,14 +66,39 @@ static bool add_crossing(tangle_pass *pass, int a, int b, const int *target, boo
 	return true;
 }
 
-/* The edges of triangle t that cross triangle u, as crossings. */
-static void edges_through(tangle_pass *pass, const int *t, const int *u, bool self)
+/* The edges of triangle t (soup index) that cross triangle u, as crossings: those t owns, so
+ * that an edge is found once, not once from each of its triangles. */
+static void edges_through(tangle_pass *pass, int triangle, const int *u, bool self)
 {
 	const vec3 *x = pass->shape->positions;
+	const int *t = pass->shape->triangles[triangle];
 	for (int k = 0; k < 3; ++k) {
+		if (!(pass->own_edges[triangle] & (1u << k))) {
+			continue;
+		}
 		int a = t[k], b = t[(k + 1) % 3];
 		if (plait_segment_crosses_triangle(x[a], x[b], x[u[0]], x[u[1]], x[u[2]])) {
 			(void)add_crossing(pass, a, b, u, self);
+		}
+	}
+}
+
+/* A vertex nearer a triangle than half the failsafe's distance began the substep in it: the
+ * failsafe ends every substep with primitives at least that far apart, so only a state that
+ * began so, or a tangle squeezed flat, has one (a sheet's vertex pressed between the ground and
+ * the sheet it was being pushed through lay in that sheet, beyond the reach of the crossing test,
+ * its contacts unable to tell the side, and the failsafe stepped in at every substep after).
+ * Its edges in t count as crossing u. */
+static void vertices_in(tangle_pass *pass, const int *t, const int *u, bool self)
+{
+	const vec3 *x = pass->shape->positions;
+	for (int k = 0; k < 3; ++k) {
+		int region;
+		float weights[3];
+		vec3 on = plait_closest_point_on_triangle(x[t[k]], x[u[0]], x[u[1]], x[u[2]], &region, weights);
+		if (v3_length(v3_sub(x[t[k]], on)) < 0.5f * FAILSAFE_DISTANCE) {
+			(void)add_crossing(pass, t[k], t[(k + 1) % 3], u, self);
+			(void)add_crossing(pass, t[k], t[(k + 2) % 3], u, self);
 		}
 	}
 }
@@ -97,8 +124,10 @@ static void visit_triangle_pair(int other, void *context)
 	         : !plait_mesh_contacts_objects_meet(pass->sim, mc, ot < ou ? ot : ou, ot < ou ? ou : ot)) {
 		return;
 	}
-	edges_through(pass, t, u, self);
-	edges_through(pass, u, t, self);
+	edges_through(pass, pass->triangle, u, self);
+	edges_through(pass, other, t, self);
+	vertices_in(pass, t, u, self);
+	vertices_in(pass, u, t, self);
 }
 
 static int find_root(int *parent, int i)
@@ -131,6 +160,20 @@ static bool is_cut(const uint64_t *cut, int count, int a, int b)
 /* The pushes of the crossings: per cloth, its vertices joined along the edges that do not cross
  * (union-find), and each crossing edge whose ends fall in different pieces pushes its end in the
  * smaller piece (fewer vertices; the higher root on a tie) through to the other end's side. */
+static int compare_pushes(const void *a, const void *b)
+{
+	const tangle_push *x = a, *y = b;
+	if (x->vertex != y->vertex) {
+		return x->vertex < y->vertex ? -1 : 1;
+	}
+	for (int k = 0; k < 3; ++k) {
+		if (x->target[k] != y->target[k]) {
+			return x->target[k] < y->target[k] ? -1 : 1;
+		}
+	}
+	return 0;
+}
+
 static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_crossing *crossings, int count)
 {
 	const plait_allocator *a = &sim->allocator;
@@ -184,9 +227,13 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 			continue;
 		}
 		const vec3 *x = p->x_prev;
-		vec3 normal =
-		    v3_cross(v3_sub(x[c->target[1]], x[c->target[0]]), v3_sub(x[c->target[2]], x[c->target[0]]));
-		float side = v3_dot(v3_sub(x[right], x[c->target[0]]), normal) >= 0.0f ? 1.0f : -1.0f;
+		vec3 normal = v3_normalize(
+		    v3_cross(v3_sub(x[c->target[1]], x[c->target[0]]), v3_sub(x[c->target[2]], x[c->target[0]])));
+		float height = v3_dot(v3_sub(x[right], x[c->target[0]]), normal);
+		if (!(fabsf(height) > FAILSAFE_DISTANCE)) {
+			continue; /* the other end lies in the plane too: no side to push to */
+		}
+		float side = height > 0.0f ? 1.0f : -1.0f;
 		const plait_material *mv = &sim->materials[p->material[wrong]];
 		float distance = p->radius[wrong] +
 		                 (p->radius[c->target[0]] + p->radius[c->target[1]] + p->radius[c->target[2]]) / 3.0f;
@@ -210,6 +257,15 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 	plait_free(a, parent);
 	plait_free(a, size);
 	plait_free(a, cut);
+	/* Once each: a vertex cut from its piece along several edges through one triangle. */
+	qsort(mc->tangle_pushes, (size_t)mc->tangle_push_count, sizeof *mc->tangle_pushes, compare_pushes);
+	int kept = 0;
+	for (int k = 0; k < mc->tangle_push_count; ++k) {
+		if (kept == 0 || compare_pushes(&mc->tangle_pushes[kept - 1], &mc->tangle_pushes[k]) != 0) {
+			mc->tangle_pushes[kept++] = mc->tangle_pushes[k];
+		}
+	}
+	mc->tangle_push_count = kept;
 	return ok;
 }
 
@@ -240,9 +296,11 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	int *sizes = plait_alloc(a, sizeof(int) * (size_t)triangles);
 	int *indices = plait_alloc(a, sizeof(int) * 3 * (size_t)triangles);
-	if (sizes == NULL || indices == NULL) {
+	uint8_t *own_edges = plait_alloc(a, (size_t)triangles);
+	if (sizes == NULL || indices == NULL || own_edges == NULL) {
 		plait_free(a, sizes);
 		plait_free(a, indices);
+		plait_free(a, own_edges);
 		return false;
 	}
 	int t = 0;
@@ -250,6 +308,7 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 		const element *el = &mc->elements[e];
 		if (cloth_triangle(sim, el)) {
 			sizes[t] = 3;
+			own_edges[t] = el->own_edges;
 			memcpy(indices + 3 * t++, el->v, sizeof el->v);
 		}
 	}
@@ -259,9 +318,10 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 	plait_free(a, sizes);
 	plait_free(a, indices);
 	if (!ok) {
+		plait_free(a, own_edges);
 		return false;
 	}
-	tangle_pass pass = {.sim = sim, .mc = mc, .shape = &shape};
+	tangle_pass pass = {.sim = sim, .mc = mc, .shape = &shape, .own_edges = own_edges};
 	for (int k = 0; k < shape.triangle_count && !pass.out_of_memory; ++k) {
 		const int *tri = shape.triangles[k];
 		vec3 lower =
@@ -272,12 +332,13 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 		plait_mesh_shape_visit(&shape, lower, upper, true, visit_triangle_pair, &pass);
 	}
 	plait_mesh_shape_destroy(&shape, a);
+	plait_free(a, own_edges);
 	ok = !pass.out_of_memory;
 	if (ok && pass.count == 0 && mc->was_tangled) {
 		/* Undone. The stage is built again at the next substep: a cloth's own pairs that began
 		 * crossing were rest pairs (closer than their contact distance in the start shape),
 		 * never pushed; now they are not (plait_mesh_contacts_pair_tangled, ever). */
-		sim->mesh_contacts_dirty = true;
+		mc->rebuild_untangled = true;
 		mc->was_tangled = false;
 	}
 	if (ok && pass.count > 0) {
