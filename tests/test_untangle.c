@@ -236,3 +236,53 @@ Test(untangle, a_cloth_set_through_another_comes_apart)
 	test_grid_free(&upper);
 	test_grid_free(&through);
 }
+
+/* A pseudo-random number in [low, high) (a linear congruential step). */
+static float uniform(unsigned *state, float low, float high)
+{
+	*state = *state * 1664525u + 1013904223u;
+	return low + (high - low) * (float)(*state >> 8) / 16777216.0f;
+}
+
+Test(untangle, three_cloths_begun_through_one_another_come_apart_without_tearing)
+{
+	/* Three sheets of random sizes, resolutions, tilts and thicknesses, through one another,
+	 * dropped 0.3 m. Exempt from contacts and the failsafe wherever both primitives had some
+	 * tangled vertex (not only a crossing edge's with its triangle's), they crumpled as they
+	 * landed, passed through each other further from every crossing, and each new crossing
+	 * freed more: 440,000 crossings found by frame 24, edges stretched to 4.5 times their
+	 * length. */
+	plait_world_id world = world_with_ground();
+	unsigned state = 1234u + 7919u * 17u;
+	for (int k = 0; k < 3; ++k) {
+		int n = 8 + (int)uniform(&state, 0.0f, 14.0f);
+		float size = uniform(&state, 0.4f, 1.0f);
+		(void)uniform(&state, 0.05f, 0.6f);
+		float slope_x = uniform(&state, -0.4f, 0.4f), slope_z = uniform(&state, -0.4f, 0.4f);
+		test_grid grid = test_grid_make(n, n, size, size);
+		float cx = uniform(&state, -0.15f, 0.15f), cz = uniform(&state, -0.15f, 0.15f);
+		float base = k == 0 ? 0.3f : 0.3f + uniform(&state, -0.05f, 0.05f);
+		for (int i = 0; i < grid.vertex_count; ++i) {
+			plait_vec3 *x = &grid.positions[i];
+			x->y = base + slope_x * x->x + slope_z * x->z;
+			x->x += cx;
+			x->z += cz;
+		}
+		plait_cloth_def def = plait_default_cloth_def();
+		def.mesh = test_grid_mesh(&grid);
+		def.surface.thickness = uniform(&state, 0.002f, 0.01f);
+		def.self_collide = true;
+		plait_error error;
+		cr_assert(!plait_object_id_is_null(plait_create_cloth(world, &def, &error)), "%s", error.message);
+		test_grid_free(&grid);
+	}
+	int begun = crossings_now(world);
+	cr_assert_gt(begun, 0);
+	long tangles = untangle(world, 11, 12);
+	cr_log_info("%d crossing pairs at the start, %ld tangles found in frames 1-11", begun, tangles);
+	cr_expect_lt(tangles, 20000, "%ld tangles found: the crossings multiplied", tangles);
+	cr_assert_eq(untangle(world, 49, 1), 0);
+	plait_frame_stats last = plait_world_get_stats(world);
+	cr_expect_lt(last.max_strain, 0.5f, "an edge ends stretched by %g", (double)last.max_strain);
+	plait_destroy_world(world);
+}

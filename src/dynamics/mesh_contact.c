@@ -100,6 +100,7 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	plait_free(a, mc->restitution_weight);
 	plait_free(a, mc->tangled);
 	plait_free(a, mc->tangle_pushes);
+	plait_free(a, mc->tangle_links);
 	plait_free(a, mc->object_of);
 	plait_mesh_contacts_free_pieces(mc, a);
 	plait_mesh_contacts_free_plan(mc, a);

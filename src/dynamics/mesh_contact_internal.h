@@ -277,6 +277,8 @@ typedef struct plait_mesh_contacts {
 	uint8_t *tangled;
 	struct tangle_push *tangle_pushes;
 	int tangle_push_count, tangle_push_capacity;
+	uint64_t *tangle_links; /* vertex pairs of crossings (mesh_contact_untangle.c, linked) */
+	int tangle_link_capacity;
 	/* Per particle (scratch of plait_mesh_contacts_restitute, zero between): the velocity
 	 * changes its pairs ask of it, summed by its weight in each, and those weights. */
 	vec3 *restitution_sum;
@@ -723,7 +725,9 @@ int plait_mesh_contacts_push_through(plait_sim *sim, plait_mesh_contacts *mc);
 
 /* Whether both primitives of a pair of this type have a vertex tangled `when`: now (while
  * mc->tangle_count > 0), neither pushed nor swept; ever, its start shape says nothing of it
- * (not a rest pair, its contact distance not clipped to its start separation). */
+ * (not a rest pair, its contact distance not clipped to its start separation). Now, moreover, a
+ * vertex of each must be linked: of a crossing edge (or a vertex in a triangle) and of the
+ * triangle it crosses. */
 bool plait_mesh_contacts_pair_tangled(const plait_mesh_contacts *mc, int type, const int *v, uint8_t when);
 
 #endif
