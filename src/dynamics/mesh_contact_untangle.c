@@ -229,6 +229,37 @@ static bool is_cut(const uint64_t *cut, int count, int a, int b)
 /* The pushes of the crossings: per cloth, its vertices joined along the edges that do not cross
  * (union-find), and each crossing edge whose ends fall in different pieces pushes its end in the
  * smaller piece (fewer vertices; the higher root on a tie) through to the other end's side. */
+/* Where a crossing cuts its cloth in no two pieces (two sheets crossed like an X, the crossing
+ * running from one's border to the other's), which end of the crossing edge is on the side
+ * fewer of its cloth's vertices near the crossing are on: the vertices within three edge
+ * lengths of it, counted by their side of the crossed triangle's plane. Returns +1 when a's
+ * side has more (b goes through), -1 when b's has, 0 when neither. */
+static int local_side_vote(const plait_sim *sim, const plait_mesh_contacts *mc, const tangle_crossing *c)
+{
+	const vec3 *x = sim->particles.x_prev;
+	vec3 normal = v3_normalize(
+	    v3_cross(v3_sub(x[c->target[1]], x[c->target[0]]), v3_sub(x[c->target[2]], x[c->target[0]])));
+	float side_a = v3_dot(v3_sub(x[c->a], x[c->target[0]]), normal);
+	vec3 centre = v3_scale(v3_add(x[c->a], x[c->b]), 0.5f);
+	float reach = 3.0f * v3_length(v3_sub(x[c->a], x[c->b]));
+	const collision_object *o = &mc->objects[mc->object_of[c->a]];
+	int with_a = 0, with_b = 0;
+	for (int e = o->first; e < o->first + o->count; ++e) {
+		const element *el = &mc->elements[e];
+		for (int q = 0; q < el->size; ++q) {
+			if (!(el->own_vertices & (1u << q)) || v3_length(v3_sub(x[el->v[q]], centre)) > reach) {
+				continue;
+			}
+			float height = v3_dot(v3_sub(x[el->v[q]], x[c->target[0]]), normal);
+			if (fabsf(height) > FAILSAFE_DISTANCE) {
+				with_a += (height > 0.0f) == (side_a > 0.0f);
+				with_b += (height > 0.0f) != (side_a > 0.0f);
+			}
+		}
+	}
+	return with_a > with_b ? 1 : with_a < with_b ? -1 : 0;
+}
+
 static int compare_pushes(const void *a, const void *b)
 {
 	const tangle_push *x = a, *y = b;
@@ -287,10 +318,16 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 	for (int k = 0; k < count && ok; ++k) {
 		const tangle_crossing *c = &crossings[k];
 		int ra = find_root(parent, c->a), rb = find_root(parent, c->b);
-		if (ra == rb) {
-			continue;
+		bool a_smaller;
+		if (ra != rb) {
+			a_smaller = size[ra] < size[rb] || (size[ra] == size[rb] && ra > rb);
+		} else {
+			int vote = local_side_vote(sim, mc, c);
+			if (vote == 0) {
+				continue;
+			}
+			a_smaller = vote < 0;
 		}
-		bool a_smaller = size[ra] < size[rb] || (size[ra] == size[rb] && ra > rb);
 		int wrong = a_smaller ? c->a : c->b, right = a_smaller ? c->b : c->a;
 		if (!(p->point[wrong].w > 0.0f)) {
 			continue;
