@@ -243,6 +243,31 @@ bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float
 	return true;
 }
 
+/* For an edge-edge, vertex-edge or vertex-vertex pair at points x: the vector from the second
+ * primitive's closest point to the first's, and the weights g of the vertices in it. */
+static vec3 closest_between(int type, const vec3 *x, float *g)
+{
+	if (type == PAIR_EDGE_EDGE) {
+		float s, t;
+		plait_closest_segments(x[0], x[1], x[2], x[3], &s, &t);
+		g[0] = 1.0f - s;
+		g[1] = s;
+		g[2] = -(1.0f - t);
+		g[3] = -t;
+		return v3_sub(v3_lerp(x[0], x[1], s), v3_lerp(x[2], x[3], t));
+	}
+	if (type == PAIR_VERTEX_EDGE) {
+		float t = plait_closest_on_segment(x[0], x[1], x[2]);
+		g[0] = 1.0f;
+		g[1] = -(1.0f - t);
+		g[2] = -t;
+		return v3_sub(x[0], v3_lerp(x[1], x[2], t));
+	}
+	g[0] = 1.0f;
+	g[1] = -1.0f;
+	return v3_sub(x[0], x[1]);
+}
+
 int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *ccd_hits)
 {
 	plait_particles *p = &sim->particles;
@@ -301,21 +326,7 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 		g[2] = -weights[1];
 		g[3] = -weights[2];
 	} else {
-		vec3 first, second;
-		float s = 0.0f, t = 0.0f;
-		if (type == PAIR_EDGE_EDGE) {
-			plait_closest_segments(x[0], x[1], x[2], x[3], &s, &t);
-			first = v3_lerp(x[0], x[1], s);
-			second = v3_lerp(x[2], x[3], t);
-		} else if (type == PAIR_VERTEX_EDGE) {
-			t = plait_closest_on_segment(x[0], x[1], x[2]);
-			first = x[0];
-			second = v3_lerp(x[1], x[2], t);
-		} else {
-			first = x[0];
-			second = x[1];
-		}
-		vec3 r = v3_sub(first, second);
+		vec3 r = closest_between(type, x, g);
 		float length = v3_length(r);
 		if (length >= pair->distance && v3_dot(r, pair->direction) >= 0.0f) {
 			return 0;
@@ -337,19 +348,6 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 		}
 		if (separation >= pair->distance) {
 			return 0;
-		}
-		if (type == PAIR_EDGE_EDGE) {
-			g[0] = 1.0f - s;
-			g[1] = s;
-			g[2] = -(1.0f - t);
-			g[3] = -t;
-		} else if (type == PAIR_VERTEX_EDGE) {
-			g[0] = 1.0f;
-			g[1] = -(1.0f - t);
-			g[2] = -t;
-		} else {
-			g[0] = 1.0f;
-			g[1] = -1.0f;
 		}
 	}
 	return plait_mesh_contacts_respond(sim, pair, g, normal, separation - pair->distance);
@@ -379,27 +377,7 @@ static float pair_geometry(const contact_pair *pair, const vec3 *x, float *g, ve
 			return v3_dot(r, *normal);
 		}
 	} else {
-		float s = 0.0f, t = 0.0f;
-		vec3 first = x[0], second = x[1];
-		if (pair->type == PAIR_EDGE_EDGE) {
-			plait_closest_segments(x[0], x[1], x[2], x[3], &s, &t);
-			first = v3_lerp(x[0], x[1], s);
-			second = v3_lerp(x[2], x[3], t);
-			g[0] = 1.0f - s;
-			g[1] = s;
-			g[2] = -(1.0f - t);
-			g[3] = -t;
-		} else if (pair->type == PAIR_VERTEX_EDGE) {
-			t = plait_closest_on_segment(x[0], x[1], x[2]);
-			second = v3_lerp(x[1], x[2], t);
-			g[0] = 1.0f;
-			g[1] = -(1.0f - t);
-			g[2] = -t;
-		} else {
-			g[0] = 1.0f;
-			g[1] = -1.0f;
-		}
-		r = v3_sub(first, second);
+		r = closest_between(pair->type, x, g);
 		if (!(v3_length(r) > 1e-9f)) {
 			*normal = pair->direction;
 			return 0.0f;
