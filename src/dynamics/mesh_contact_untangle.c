@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "collision/intersect.h"
+#include "collision/element_tree.h"
 #include "collision/mesh_shape.h"
 
 /* An edge of a triangle crossing another triangle at the substep's start. */
@@ -41,9 +42,9 @@ typedef struct tangle_crossing {
 typedef struct tangle_pass {
 	const plait_sim *sim;
 	const plait_mesh_contacts *mc;
-	const plait_mesh_shape *shape;
-	const uint8_t *own_edges; /* per soup triangle: the edges its element owns (bit k: v[k]-v[k+1]) */
-	int triangle;
+	const vec3 *x;             /* positions at the substep's start */
+	const int (*triangles)[3]; /* the cloth triangles searched */
+	const uint8_t *own_edges;  /* per triangle: the edges its element owns (bit k: v[k]-v[k+1]) */
 	tangle_crossing *crossings;
 	int count, capacity;
 	bool out_of_memory;
@@ -70,8 +71,8 @@ static bool add_crossing(tangle_pass *pass, int a, int b, const int *target, boo
  * that an edge is found once, not once from each of its triangles. */
 static void edges_through(tangle_pass *pass, int triangle, const int *u, bool self)
 {
-	const vec3 *x = pass->shape->positions;
-	const int *t = pass->shape->triangles[triangle];
+	const vec3 *x = pass->x;
+	const int *t = pass->triangles[triangle];
 	for (int k = 0; k < 3; ++k) {
 		if (!(pass->own_edges[triangle] & (1u << k))) {
 			continue;
@@ -91,7 +92,7 @@ static void edges_through(tangle_pass *pass, int triangle, const int *u, bool se
  * Its edges in t count as crossing u. */
 static void vertices_in(tangle_pass *pass, const int *t, const int *u, bool self)
 {
-	const vec3 *x = pass->shape->positions;
+	const vec3 *x = pass->x;
 	for (int k = 0; k < 3; ++k) {
 		int region;
 		float weights[3];
@@ -103,13 +104,10 @@ static void vertices_in(tangle_pass *pass, const int *t, const int *u, bool self
 	}
 }
 
-static void visit_triangle_pair(int other, void *context)
+static void visit_triangle_pair(int first, int other, void *context)
 {
 	tangle_pass *pass = context;
-	if (other <= pass->triangle) {
-		return; /* each pair once */
-	}
-	const int *t = pass->shape->triangles[pass->triangle], *u = pass->shape->triangles[other];
+	const int *t = pass->triangles[first], *u = pass->triangles[other];
 	for (int i = 0; i < 3; ++i) {
 		for (int j = 0; j < 3; ++j) {
 			if (t[i] == u[j]) {
@@ -124,7 +122,7 @@ static void visit_triangle_pair(int other, void *context)
 	         : !plait_mesh_contacts_objects_meet(pass->sim, mc, ot < ou ? ot : ou, ot < ou ? ou : ot)) {
 		return;
 	}
-	edges_through(pass, pass->triangle, u, self);
+	edges_through(pass, first, u, self);
 	edges_through(pass, other, t, self);
 	vertices_in(pass, t, u, self);
 	vertices_in(pass, u, t, self);
@@ -400,45 +398,46 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 	if (triangles < 2) {
 		return true;
 	}
-	int *sizes = plait_alloc(a, sizeof(int) * (size_t)triangles);
-	int *indices = plait_alloc(a, sizeof(int) * 3 * (size_t)triangles);
+	int(*tris)[3] = plait_alloc(a, sizeof *tris * (size_t)triangles);
 	uint8_t *own_edges = plait_alloc(a, (size_t)triangles);
-	if (sizes == NULL || indices == NULL || own_edges == NULL) {
-		plait_free(a, sizes);
-		plait_free(a, indices);
-		plait_free(a, own_edges);
-		return false;
-	}
-	int t = 0;
-	for (int e = 0; e < mc->element_count; ++e) {
-		const element *el = &mc->elements[e];
-		if (cloth_triangle(sim, el)) {
-			sizes[t] = 3;
+	vec3 *boxes = plait_alloc(a, sizeof(vec3) * 3 * (size_t)triangles); /* centres, lowers, uppers */
+	plait_element_tree tree = {0};
+	bool ok = tris != NULL && own_edges != NULL && boxes != NULL;
+	tangle_pass pass = {
+	    .sim = sim, .mc = mc, .x = p->x_prev, .triangles = (const int(*)[3])tris, .own_edges = own_edges};
+	if (ok) {
+		vec3 *centre = boxes, *lower = boxes + triangles, *upper = boxes + 2 * triangles;
+		int t = 0;
+		for (int e = 0; e < mc->element_count; ++e) {
+			const element *el = &mc->elements[e];
+			if (!cloth_triangle(sim, el)) {
+				continue;
+			}
+			const vec3 *x = p->x_prev;
+			memcpy(tris[t], el->v, sizeof el->v);
 			own_edges[t] = el->own_edges;
-			memcpy(indices + 3 * t++, el->v, sizeof el->v);
+			/* (Not grown: a vertex in a flat triangle's plane meets its box exactly. Grown by the
+			 * failsafe's distance, the boxes met more vertices a rounding off such planes,
+			 * and the two test sheets came apart the other way round, and later.) */
+			lower[t] = v3_min(x[el->v[0]], v3_min(x[el->v[1]], x[el->v[2]]));
+			upper[t] = v3_max(x[el->v[0]], v3_max(x[el->v[1]], x[el->v[2]]));
+			centre[t] = v3_scale(v3_add(lower[t], upper[t]), 0.5f);
+			++t;
+		}
+		ok = plait_element_tree_build(&tree, a, centre, triangles);
+		if (ok) {
+			plait_element_tree_refit(&tree, lower, upper);
+			plait_element_tree_pairs(&tree, lower, upper, visit_triangle_pair, &pass);
 		}
 	}
-	plait_mesh_def mesh = {(const plait_vec3 *)p->x_prev, p->count, sizes, triangles, indices};
-	plait_mesh_shape shape;
-	bool ok = plait_mesh_shape_build(&shape, a, &mesh, NULL) == PLAIT_OK;
-	plait_free(a, sizes);
-	plait_free(a, indices);
+	plait_element_tree_destroy(&tree, a);
+	plait_free(a, tris);
+	plait_free(a, own_edges);
+	plait_free(a, boxes);
 	if (!ok) {
-		plait_free(a, own_edges);
+		plait_free(a, pass.crossings);
 		return false;
 	}
-	tangle_pass pass = {.sim = sim, .mc = mc, .shape = &shape, .own_edges = own_edges};
-	for (int k = 0; k < shape.triangle_count && !pass.out_of_memory; ++k) {
-		const int *tri = shape.triangles[k];
-		vec3 lower =
-		    v3_min(shape.positions[tri[0]], v3_min(shape.positions[tri[1]], shape.positions[tri[2]]));
-		vec3 upper =
-		    v3_max(shape.positions[tri[0]], v3_max(shape.positions[tri[1]], shape.positions[tri[2]]));
-		pass.triangle = k;
-		plait_mesh_shape_visit(&shape, lower, upper, true, visit_triangle_pair, &pass);
-	}
-	plait_mesh_shape_destroy(&shape, a);
-	plait_free(a, own_edges);
 	ok = !pass.out_of_memory;
 	if (ok && pass.count == 0 && mc->was_tangled) {
 		/* Undone. The stage is built again at the next substep: a cloth's own pairs that began
