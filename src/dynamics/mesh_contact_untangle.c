@@ -1,27 +1,29 @@
-/* States that begin tangled (issue 3, seed 000 §4.4): cloth triangles that cross other cloth
- * triangles, their own cloth's (when it self-collides) or a mesh or box collider's at a substep's
- * start. Everything else in mesh contacts takes the substep's start to be free of crossings and
- * keeps it so; a scene that begins tangled (layers modelled through each other, a garment put on
- * through a body) would stay tangled for good, its contacts and failsafe pushing the tangled
- * parts back to the wrong side at every substep.
+/* States that begin tangled (issue 3 item 5, seed 000 §4.4): cloth triangles that cross other
+ * cloths' triangles, or their own cloth's when it self-collides, at a substep's start. Everything
+ * else in mesh contacts takes the substep's start to be free of crossings and keeps it so; a
+ * scene that began tangled (layers modelled through each other, positions set through another
+ * cloth) stayed tangled for good, its contacts and failsafe holding the tangle in place.
  *
- * Found by a hierarchy over the triangles at the substep's start, when a check is due: at the
- * first substep of the stage (objects came or went) and, while crossings remain, at every
- * substep. Then:
- *   - the vertices of crossing edges and triangles are *tangled*: a pair both of whose
- *     primitives have a tangled vertex is neither pushed nor swept by the failsafe (Maya's self
- *     trapped check: collisions step aside where surfaces already pass through each other, so
- *     they do not hold them there). A tangled vertex still meets everything else: exempt from
- *     every pair, a crumpling cloth passed through itself further from every crossing, each new
- *     crossing freed more vertices, and a sheet tore itself into a million crossings;
- *   - each cloth's edges that cross are cut from it, and the pieces it falls into are found
- *     (union-find over its other edges): a piece cut off by crossings is the smaller of the two
- *     on either side of a crossing edge (global intersection analysis after Baraff, Witkin and
- *     Kass 2003), and the edge's end in it is pushed through the triangle it crosses, to the
- *     other end's side. Substep after substep the crossing contour moves over the smaller
- *     piece until it is gone. A crossing whose edge's ends stay in one piece (the contour
- *     ends inside the cloth: the other surface's border lies within it) is left to the other
- *     surface's edges, which it cuts. */
+ * A search runs when one is due: at the stage's first substep, after positions are set from
+ * outside, and at every substep while crossings remain. A self-traversal of a tree over the
+ * cloth triangles at the substep's start finds every edge that crosses a triangle, and every
+ * vertex that lies in one (nearer than the failsafe leaves anything). Then:
+ *   - Trapped check. Each crossing's vertices are linked with those of the triangle it
+ *     crosses; a pair of primitives with a linked vertex on each side is neither pushed nor
+ *     swept by the failsafe for the substep (Maya's self trapped check: collisions step aside
+ *     where surfaces already pass through each other). Everything else is held as usual: looser
+ *     rules let tangles spread (architecture.md).
+ *   - Pushes through. Each cloth is cut along its crossing edges into pieces (union-find over
+ *     its other edges); a crossing edge whose ends lie in different pieces pushes its end in
+ *     the smaller one through the triangle it crosses, to the other end's side (global
+ *     intersection analysis after Baraff, Witkin and Kass 2003), a contact distance per
+ *     collision iteration at most. Where a crossing cuts its cloth in no two pieces (sheets
+ *     crossed like an X), its ends are weighed by which side of the triangle more of the
+ *     cloth around them is on. The contour moves over the smaller side until it is gone.
+ *   - After. Pairs that began crossing are never rest pairs nor clipped to their start
+ *     separation (TANGLED_EVER); once none is left, the stage is built again.
+ * Crossings with mesh and box colliders are not searched: a cloth vertex inside a collider is
+ * the collider pass's to push out (architecture.md, "What is not here yet"). */
 #include "dynamics/mesh_contact_internal.h"
 
 #include <math.h>
@@ -67,8 +69,8 @@ static bool add_crossing(tangle_pass *pass, int a, int b, const int *target, boo
 	return true;
 }
 
-/* The edges of triangle t (soup index) that cross triangle u, as crossings: those t owns, so
- * that an edge is found once, not once from each of its triangles. */
+/* The edges of the searched triangle `triangle` that cross triangle u, as crossings: those it
+ * owns, so that an edge is found once, not once from each of its triangles. */
 static void edges_through(tangle_pass *pass, int triangle, const int *u, bool self)
 {
 	const vec3 *x = pass->x;
@@ -136,10 +138,15 @@ static void visit_triangle_pair(int first, int other, void *context)
  * each other crumpled as they landed, passed through each other further from every crossing,
  * each new crossing freed more, and the frame had 440,000 crossings by frame 24.) */
 
-static uint64_t link_key(int a, int b)
+static uint64_t edge_key(int a, int b)
 {
 	uint32_t low = (uint32_t)(a < b ? a : b), high = (uint32_t)(a < b ? b : a);
-	return ((uint64_t)low << 32 | high) + 1; /* 0 marks an empty slot */
+	return ((uint64_t)low << 32) | high;
+}
+
+static uint64_t link_key(int a, int b)
+{
+	return edge_key(a, b) + 1u; /* 0 marks an empty slot */
 }
 
 static uint32_t link_slot(uint64_t key, uint32_t mask)
@@ -161,7 +168,7 @@ static bool linked(const plait_mesh_contacts *mc, int a, int b)
 	}
 }
 
-/* The links of `count` crossings, into a set at most half full. */
+/* The links of `count` crossings (six each), into a set at most a quarter full. */
 static bool link_crossings(plait_sim *sim, plait_mesh_contacts *mc, const tangle_crossing *crossings,
                            int count)
 {
@@ -206,12 +213,6 @@ static int find_root(int *parent, int i)
 	return i;
 }
 
-static uint64_t edge_key(int a, int b)
-{
-	uint32_t low = (uint32_t)(a < b ? a : b), high = (uint32_t)(a < b ? b : a);
-	return ((uint64_t)low << 32) | high;
-}
-
 static int compare_keys(const void *a, const void *b)
 {
 	uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -224,14 +225,12 @@ static bool is_cut(const uint64_t *cut, int count, int a, int b)
 	return bsearch(&key, cut, (size_t)count, sizeof *cut, compare_keys) != NULL;
 }
 
-/* The pushes of the crossings: per cloth, its vertices joined along the edges that do not cross
- * (union-find), and each crossing edge whose ends fall in different pieces pushes its end in the
- * smaller piece (fewer vertices; the higher root on a tie) through to the other end's side. */
 /* Where a crossing cuts its cloth in no two pieces (two sheets crossed like an X, the crossing
  * running from one's border to the other's), which end of the crossing edge is on the side
  * fewer of its cloth's vertices near the crossing are on: the vertices within three edge
  * lengths of it, counted by their side of the crossed triangle's plane. Returns +1 when a's
- * side has more (b goes through), -1 when b's has, 0 when neither. */
+ * side has more (b goes through), -1 when b's has, 0 when neither. (A pass over the cloth's
+ * vertices per such crossing: only while crossings remain.) */
 static int local_side_vote(const plait_sim *sim, const plait_mesh_contacts *mc, const tangle_crossing *c)
 {
 	const vec3 *x = sim->particles.x_prev;
@@ -272,6 +271,10 @@ static int compare_pushes(const void *a, const void *b)
 	return 0;
 }
 
+/* The pushes of the crossings: per cloth, its vertices joined along the edges that do not cross
+ * (union-find), and each crossing edge whose ends fall in different pieces pushes its end in the
+ * smaller piece (fewer vertices; the higher root on a tie) through to the other end's side; one
+ * whose ends fall in one piece, the end local_side_vote weighs less. */
 static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_crossing *crossings, int count)
 {
 	const plait_allocator *a = &sim->allocator;
