@@ -155,9 +155,9 @@ Test(cli_run, stats_jsonl_has_one_line_per_frame_with_the_keys)
 	char *text = read_file(path, NULL);
 	cr_assert_not_null(text);
 	// In this order: the collision counters follow contacts.
-	static const char *const keys[] = {"frame",        "ms",          "kinetic_energy", "max_strain",
-	                                   "penetrations", "nonfinite",   "contacts",       "ccd_hits",
-	                                   "failsafe",     "tangles",     "collision_ms"};
+	static const char *const keys[] = {"frame",        "ms",        "kinetic_energy", "max_strain",
+	                                   "penetrations", "nonfinite", "contacts",       "ccd_hits",
+	                                   "failsafe",     "tangles",   "collision_ms"};
 	int lines = 0;
 	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
 		json_error_t error;
@@ -476,4 +476,46 @@ Test(cli_run, binary_exit_codes)
 	snprintf(command, sizeof command, "'%s' run /nonexistent/scene.json > /dev/null 2>&1", binary);
 	status = system(command);
 	cr_expect(WIFEXITED(status) && WEXITSTATUS(status) == 1);
+}
+
+/* examples/tangled_layers.json: two sheets modelled through each other. The run finds the
+ * crossings (stats.jsonl's tangles) and they come apart within a few frames, for good. */
+Test(cli_run, the_tangled_layers_example_comes_apart)
+{
+	char *dir = make_temp_dir();
+	const char *argv[] = {"plait", "run", PLAIT_SOURCE_DIR "/examples/tangled_layers.json",
+	                      "--out", dir,   "--check"};
+	cli_result r = run_cli(6, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	char path[1024];
+	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
+	char *text = read_file(path, NULL);
+	cr_assert_not_null(text);
+	int lines = 0, first_clean = -1;
+	long tangles = 0;
+	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
+		json_error_t error;
+		json_t *json = json_loads(line, 0, &error);
+		cr_assert_not_null(json, "line %d is not JSON: %s", lines, line);
+		int frame = (int)json_integer_value(json_object_get(json, "frame"));
+		int crossings = (int)json_integer_value(json_object_get(json, "intersections"));
+		tangles += json_integer_value(json_object_get(json, "tangles"));
+		if (frame == 0) {
+			cr_expect_gt(crossings, 0, "the example should begin tangled");
+		} else if (first_clean < 0 && crossings == 0) {
+			first_clean = frame;
+		} else if (first_clean > 0) {
+			cr_expect_eq(crossings, 0, "frame %d: %d crossing pairs after frame %d was clean", frame,
+			             crossings, first_clean);
+		}
+		json_decref(json);
+		++lines;
+	}
+	cr_expect_eq(lines, 49);
+	cr_expect_gt(tangles, 0, "no tangles found");
+	cr_expect(first_clean > 0 && first_clean <= 6, "first frame free of crossings: %d", first_clean);
+	free(text);
+	free_result(&r);
+	remove_tree(dir);
+	free(dir);
 }
