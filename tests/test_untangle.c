@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "collision/intersect.h"
 #include "dynamics/mesh_contact_internal.h"
 #include "world/world.h"
 #include "test_support.h"
@@ -308,4 +309,63 @@ Test(untangle, two_cloths_crossed_so_that_neither_is_cut_in_two_come_apart)
 	cr_assert_eq(untangle(world, 55, 1), 0);
 	expect_rested(world);
 	plait_destroy_world(world);
+}
+
+/* Curve segments that cross the sheet's triangles (the checker counts cloth triangles only). */
+static int rope_crossings(const plait_vec3 *rope, int rope_count, const plait_vec3 *sheet,
+                          const test_grid *grid)
+{
+	int hits = 0;
+	for (int i = 0; i + 1 < rope_count; ++i) {
+		for (int f = 0; f < grid->face_count; ++f) {
+			const int *q = &grid->face_indices[4 * f];
+			for (int half = 0; half < 2; ++half) {
+				hits += plait_segment_crosses_triangle(rope[i], rope[i + 1], sheet[q[0]], sheet[q[1 + half]],
+				                                       sheet[q[2 + half]]);
+			}
+		}
+	}
+	return hits;
+}
+
+Test(untangle, a_cord_begun_through_a_sheet_comes_out_of_it)
+{
+	/* A cord lying over a sheet that dips through it and back (a drawstring threaded wrong): its
+	 * dip, the smaller piece between the two crossings, goes back up through the sheet. Before
+	 * curves were searched, it stayed through the sheet for good. */
+	plait_world_id world = world_with_ground();
+	test_grid grid = tilted_sheet(16, 0.8f, 0.0f, 0.4f, 0.0f, 0.0f);
+	plait_object_id sheet = add_cloth(world, &grid);
+	plait_vec3 cord[21];
+	for (int i = 0; i < 21; ++i) {
+		float s = (float)i / 20.0f;
+		cord[i] = (plait_vec3){-0.3f + 0.5f * s, s > 0.6f && s < 0.85f ? 0.37f : 0.43f, 0.03f};
+	}
+	plait_curve_def def = plait_default_curve_def();
+	def.positions = cord;
+	def.vertex_count = 21;
+	def.surface.thickness = 0.004f;
+	plait_error error;
+	plait_object_id curve = plait_create_curve(world, &def, &error);
+	cr_assert(!plait_object_id_is_null(curve), "%s", error.message);
+	plait_vec3 *x = malloc(sizeof *x * (size_t)grid.vertex_count);
+	long tangles = 0;
+	for (int frame = 0; frame <= 48; ++frame) {
+		if (frame > 0) {
+			cr_assert(test_step_frames(world, 1));
+			tangles += plait_world_get_stats(world).tangles;
+		}
+		cr_assert_eq(plait_object_get_positions(sheet, 0, grid.vertex_count, x, NULL), PLAIT_OK);
+		cr_assert_eq(plait_object_get_positions(curve, 0, 21, cord, NULL), PLAIT_OK);
+		int crossings = rope_crossings(cord, 21, x, &grid);
+		if (frame == 0) {
+			cr_assert_gt(crossings, 0, "the cord should begin through the sheet");
+		} else if (frame >= 4) {
+			cr_assert_eq(crossings, 0, "frame %d: the cord crosses the sheet %d times", frame, crossings);
+		}
+	}
+	cr_expect_gt(tangles, 0);
+	free(x);
+	plait_destroy_world(world);
+	test_grid_free(&grid);
 }

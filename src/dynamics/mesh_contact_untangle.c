@@ -1,25 +1,28 @@
-/* States that begin tangled (issue 3 item 5, seed 000 §4.4): cloth triangles that cross other
- * cloths' triangles, or their own cloth's when it self-collides, at a substep's start. Everything
- * else in mesh contacts takes the substep's start to be free of crossings and keeps it so; a
- * scene that began tangled (layers modelled through each other, positions set through another
- * cloth) stayed tangled for good, its contacts and failsafe holding the tangle in place.
+/* States that begin tangled (issue 3 item 5, seed 000 §4.4): cloth triangles and curve segments
+ * that cross other cloths' triangles, or their own cloth's when it self-collides, at a substep's
+ * start. Everything else in mesh contacts takes the substep's start to be free of crossings and
+ * keeps it so; a scene that began tangled (layers modelled through each other, a cord through a
+ * sheet, positions set through another cloth) stayed tangled for good, its contacts and
+ * failsafe holding the tangle in place.
  *
  * A search runs when one is due: at the stage's first substep, after positions are set from
  * outside, and at every substep while crossings remain. A self-traversal of a tree over the
- * cloth triangles at the substep's start finds every edge that crosses a triangle, and every
- * vertex that lies in one (nearer than the failsafe leaves anything). Then:
+ * cloth triangles and curve segments at the substep's start finds every edge or segment that
+ * crosses a triangle, and every vertex that lies in one (nearer than the failsafe leaves
+ * anything). Then:
  *   - Trapped check. Each crossing's vertices are linked with those of the triangle it
  *     crosses; a pair of primitives with a linked vertex on each side is neither pushed nor
  *     swept by the failsafe for the substep (Maya's self trapped check: collisions step aside
  *     where surfaces already pass through each other). Everything else is held as usual: looser
  *     rules let tangles spread (architecture.md).
- *   - Pushes through. Each cloth is cut along its crossing edges into pieces (union-find over
- *     its other edges); a crossing edge whose ends lie in different pieces pushes its end in
- *     the smaller one through the triangle it crosses, to the other end's side (global
- *     intersection analysis after Baraff, Witkin and Kass 2003), a contact distance per
- *     collision iteration at most. Where a crossing cuts its cloth in no two pieces (sheets
- *     crossed like an X), its ends are weighed by which side of the triangle more of the
- *     cloth around them is on. The contour moves over the smaller side until it is gone.
+ *   - Pushes through. Each cloth and curve is cut along its crossing edges into pieces
+ *     (union-find over its other edges); a crossing edge whose ends lie in different pieces
+ *     pushes its end in the smaller one through the triangle it crosses, to the other end's
+ *     side (global intersection analysis after Baraff, Witkin and Kass 2003), a contact
+ *     distance per collision iteration at most. Where a crossing cuts its cloth in no two
+ *     pieces (sheets crossed like an X), its ends are weighed by which side of the triangle
+ *     more of the cloth around them is on. The contour moves over the smaller side until it is
+ *     gone.
  *   - After. Pairs that began crossing are never rest pairs nor clipped to their start
  *     separation (TANGLED_EVER); once none is left, the stage is built again.
  * Crossings with mesh and box colliders are not searched: a cloth vertex inside a collider is
@@ -45,12 +48,21 @@ typedef struct tangle_pass {
 	const plait_sim *sim;
 	const plait_mesh_contacts *mc;
 	const vec3 *x;             /* positions at the substep's start */
-	const int (*triangles)[3]; /* the cloth triangles searched */
-	const uint8_t *own_edges;  /* per triangle: the edges its element owns (bit k: v[k]-v[k+1]) */
+	const int (*triangles)[3]; /* the elements searched: cloth triangles and curve segments */
+	const uint8_t *sizes;      /* per element searched: 3 (a triangle) or 2 (a segment) */
+	const uint8_t *own_edges;  /* per element searched: the edges it owns (bit k: v[k]-v[k+1]) */
 	tangle_crossing *crossings;
 	int count, capacity;
 	bool out_of_memory;
 } tangle_pass;
+
+/* The elements searched: cloth triangles and curve segments (colliders' crossings are the
+ * collider pass's, and loose particles cannot be cut). */
+static bool searched(const plait_sim *sim, const element *el)
+{
+	plait_object_type type = sim->materials[el->material].type;
+	return (el->size == 3 && type == PLAIT_OBJECT_CLOTH) || (el->size == 2 && type == PLAIT_OBJECT_CURVE);
+}
 
 static bool add_crossing(tangle_pass *pass, int a, int b, const int *target, bool self)
 {
@@ -106,12 +118,37 @@ static void vertices_in(tangle_pass *pass, const int *t, const int *u, bool self
 	}
 }
 
+/* A curve segment s that crosses triangle u, or one of whose ends lies in it (as vertices_in),
+ * as a crossing (when s owns its edge, so that it is found once). */
+static void segment_through(tangle_pass *pass, int segment, const int *u, bool self)
+{
+	const vec3 *x = pass->x;
+	const int *s = pass->triangles[segment];
+	if (!(pass->own_edges[segment] & 1u)) {
+		return;
+	}
+	bool crossing = plait_segment_crosses_triangle(x[s[0]], x[s[1]], x[u[0]], x[u[1]], x[u[2]]);
+	for (int k = 0; k < 2 && !crossing; ++k) {
+		int region;
+		float weights[3];
+		vec3 on = plait_closest_point_on_triangle(x[s[k]], x[u[0]], x[u[1]], x[u[2]], &region, weights);
+		crossing = v3_length(v3_sub(x[s[k]], on)) < 0.5f * FAILSAFE_DISTANCE;
+	}
+	if (crossing) {
+		(void)add_crossing(pass, s[0], s[1], u, self);
+	}
+}
+
 static void visit_triangle_pair(int first, int other, void *context)
 {
 	tangle_pass *pass = context;
 	const int *t = pass->triangles[first], *u = pass->triangles[other];
-	for (int i = 0; i < 3; ++i) {
-		for (int j = 0; j < 3; ++j) {
+	int nt = pass->sizes[first], nu = pass->sizes[other];
+	if (nt == 2 && nu == 2) {
+		return; /* curves against curves: particle pairs' */
+	}
+	for (int i = 0; i < nt; ++i) {
+		for (int j = 0; j < nu; ++j) {
 			if (t[i] == u[j]) {
 				return; /* neighbours touch by construction */
 			}
@@ -122,6 +159,10 @@ static void visit_triangle_pair(int first, int other, void *context)
 	bool self = ot == ou;
 	if (self ? !mc->objects[ot].self
 	         : !plait_mesh_contacts_objects_meet(pass->sim, mc, ot < ou ? ot : ou, ot < ou ? ou : ot)) {
+		return;
+	}
+	if (nt == 2 || nu == 2) {
+		segment_through(pass, nt == 2 ? first : other, nt == 2 ? u : t, self);
 		return;
 	}
 	edges_through(pass, first, u, self);
@@ -298,11 +339,11 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 	}
 	for (int e = 0; e < mc->element_count; ++e) {
 		const element *el = &mc->elements[e];
-		if (el->size != 3 || sim->materials[el->material].type == PLAIT_OBJECT_COLLIDER) {
+		if (!searched(sim, el)) {
 			continue;
 		}
-		for (int k = 0; k < 3; ++k) {
-			int u = el->v[k], w = el->v[(k + 1) % 3];
+		for (int k = 0; k < (el->size == 3 ? 3 : 1); ++k) {
+			int u = el->v[k], w = el->v[(k + 1) % el->size];
 			if (!is_cut(cut, count, u, w)) {
 				int ru = find_root(parent, u), rw = find_root(parent, w);
 				if (ru != rw) {
@@ -376,11 +417,6 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 	return ok;
 }
 
-static bool cloth_triangle(const plait_sim *sim, const element *el)
-{
-	return el->size == 3 && sim->materials[el->material].type != PLAIT_OBJECT_COLLIDER;
-}
-
 bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 {
 	const plait_allocator *a = &sim->allocator;
@@ -396,34 +432,40 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 	/* Cloth triangles only: crossings with colliders are the collider pass's. */
 	int triangles = 0;
 	for (int e = 0; e < mc->element_count; ++e) {
-		triangles += cloth_triangle(sim, &mc->elements[e]);
+		triangles += searched(sim, &mc->elements[e]);
 	}
 	if (triangles < 2) {
 		return true;
 	}
 	int(*tris)[3] = plait_alloc(a, sizeof *tris * (size_t)triangles);
-	uint8_t *own_edges = plait_alloc(a, (size_t)triangles);
+	uint8_t *own_edges = plait_alloc(a, (size_t)triangles), *sizes = plait_alloc(a, (size_t)triangles);
 	vec3 *boxes = plait_alloc(a, sizeof(vec3) * 3 * (size_t)triangles); /* centres, lowers, uppers */
 	plait_element_tree tree = {0};
-	bool ok = tris != NULL && own_edges != NULL && boxes != NULL;
-	tangle_pass pass = {
-	    .sim = sim, .mc = mc, .x = p->x_prev, .triangles = (const int(*)[3])tris, .own_edges = own_edges};
+	bool ok = tris != NULL && own_edges != NULL && sizes != NULL && boxes != NULL;
+	tangle_pass pass = {.sim = sim,
+	                    .mc = mc,
+	                    .x = p->x_prev,
+	                    .triangles = (const int(*)[3])tris,
+	                    .sizes = sizes,
+	                    .own_edges = own_edges};
 	if (ok) {
 		vec3 *centre = boxes, *lower = boxes + triangles, *upper = boxes + 2 * triangles;
 		int t = 0;
 		for (int e = 0; e < mc->element_count; ++e) {
 			const element *el = &mc->elements[e];
-			if (!cloth_triangle(sim, el)) {
+			if (!searched(sim, el)) {
 				continue;
 			}
 			const vec3 *x = p->x_prev;
 			memcpy(tris[t], el->v, sizeof el->v);
 			own_edges[t] = el->own_edges;
+			sizes[t] = el->size;
 			/* (Not grown: a vertex in a flat triangle's plane meets its box exactly. Grown by the
 			 * failsafe's distance, the boxes met more vertices a rounding off such planes,
 			 * and the two test sheets came apart the other way round, and later.) */
-			lower[t] = v3_min(x[el->v[0]], v3_min(x[el->v[1]], x[el->v[2]]));
-			upper[t] = v3_max(x[el->v[0]], v3_max(x[el->v[1]], x[el->v[2]]));
+			vec3 last = x[el->v[el->size - 1]];
+			lower[t] = v3_min(x[el->v[0]], v3_min(x[el->v[1]], last));
+			upper[t] = v3_max(x[el->v[0]], v3_max(x[el->v[1]], last));
 			centre[t] = v3_scale(v3_add(lower[t], upper[t]), 0.5f);
 			++t;
 		}
@@ -436,6 +478,7 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 	plait_element_tree_destroy(&tree, a);
 	plait_free(a, tris);
 	plait_free(a, own_edges);
+	plait_free(a, sizes);
 	plait_free(a, boxes);
 	if (!ok) {
 		plait_free(a, pass.crossings);
