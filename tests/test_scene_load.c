@@ -31,7 +31,7 @@ static const char *full_scene =
     "{\n"
     "  \"world\": {\"fps\": 30, \"substeps\": 5, \"max_collision_iterations\": 6, \"gravity\": [0, -10, 0],\n"
     "            \"air_density\": 1.2, \"wind\": {\"speed\": 3, \"direction\": [1, 0, 0], \"noise\": 0.5},\n"
-    "            \"space_scale\": 0.01, \"time_scale\": 2, \"seed\": 7},\n"
+    "            \"space_scale\": 0.01, \"time_scale\": 2, \"seed\": 7, \"untangle\": false},\n"
     "  \"frames\": 48,\n"
     "  \"objects\": [\n"
     "    {\"name\": \"flag\", \"type\": \"cloth\", \"grid\": {\"size\": [2, 1], \"resolution\": [4, 2],\n"
@@ -68,6 +68,7 @@ Test(scene_load, world_values)
 	cr_expect_float_eq(scene.world.space_scale, 0.01f, 1e-9f);
 	cr_expect_float_eq(scene.world.time_scale, 2.0f, 1e-6f);
 	cr_expect_eq(scene.world.seed, 7u);
+	cr_expect(!scene.world.untangle);
 	cr_expect_eq(scene.frames, 48);
 	cr_expect_eq(scene.object_count, 4);
 	cr_expect_eq(scene.warning_count, 0);
@@ -196,6 +197,7 @@ Test(scene_load, defaults_come_from_the_api)
 	cr_expect_float_eq(scene.world.air_density, world.air_density, 0.0f);
 	cr_expect_float_eq(scene.world.wind.speed, world.wind.speed, 0.0f);
 	cr_expect_float_eq(scene.world.space_scale, world.space_scale, 0.0f);
+	cr_expect(scene.world.untangle && world.untangle);
 	cr_expect_eq(scene.world.internal_value, world.internal_value);
 	cr_expect_eq(scene.frames, PLAIT_SCENE_DEFAULT_FRAMES);
 	plait_cloth_def cloth = plait_default_cloth_def();

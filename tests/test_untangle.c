@@ -369,3 +369,36 @@ Test(untangle, a_cord_begun_through_a_sheet_comes_out_of_it)
 	plait_destroy_world(world);
 	test_grid_free(&grid);
 }
+
+Test(untangle, turned_off_it_leaves_a_tangled_scene_as_it_was)
+{
+	/* plait_world_def.untangle false: no search, nothing counted, the crossings held. */
+	plait_world_def wdef = plait_default_world_def();
+	wdef.air_density = 0.0f;
+	wdef.substeps = 4;
+	wdef.untangle = false;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	cr_assert(!plait_world_id_is_null(world));
+	plait_collider_def ground = plait_default_collider_def();
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &ground, NULL)));
+	test_grid flat = tilted_sheet(20, 1.0f, 0.0f, 0.5f, 0.0f, 0.0f);
+	test_grid tilted = tilted_sheet(12, 0.6f, 0.1f, 0.5f, 0.1f, 0.3f);
+	add_cloth(world, &flat);
+	add_cloth(world, &tilted);
+	int begun = crossings_now(world);
+	for (int frame = 1; frame <= 8; ++frame) {
+		cr_assert(test_step_frames(world, 1));
+		cr_assert_eq(plait_world_get_stats(world).tangles, 0, "frame %d: tangles counted", frame);
+	}
+	cr_expect_geq(crossings_now(world), begun, "the crossings should be held as they were");
+	/* Turned back on, it finds them and undoes them. */
+	plait_world_def on = plait_world_get_def(world);
+	on.untangle = true;
+	plait_error error;
+	cr_assert_eq(plait_world_set_def(world, &on, &error), PLAIT_OK, "%s", error.message);
+	cr_expect_gt(untangle(world, 6, 7), 0);
+	cr_assert_eq(untangle(world, 20, 1), 0);
+	plait_destroy_world(world);
+	test_grid_free(&flat);
+	test_grid_free(&tilted);
+}

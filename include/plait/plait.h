@@ -121,6 +121,12 @@ typedef struct plait_world_def {
 	 * keeps them from passing through each other (true). Self-collision of a cloth is its own
 	 * flag, plait_cloth_def.self_collide. */
 	bool cloth_contacts;
+	/* Crossings between cloths, or within a self-colliding cloth, or of curves through cloth,
+	 * that a scene begins with (or that positions set from outside make) are found and undone
+	 * over the next frames, counted in plait_frame_stats.tangles (true). False leaves them as
+	 * they are, held by the contacts and the failsafe, and skips the search at the first
+	 * substep (for scenes built to begin free of crossings). */
+	bool untangle;
 
 	plait_alloc_fn *alloc;
 	plait_free_fn *free;

@@ -126,7 +126,17 @@ bool plait_mesh_contacts_begin_substep(plait_sim *sim)
 			plait_mesh_contacts_forget_rest_bounds(mc); /* positions may have been set between frames */
 			plait_mesh_contacts_check_plan(sim, mc);    /* and pins */
 		}
-		if (mc->active && mc->tangle_check_due && !plait_mesh_contacts_find_tangles(sim, mc)) {
+		if (!sim->settings.untangle) {
+			/* Left as they are; searched for when untangling is turned back on. */
+			if (mc->tangle_count > 0) {
+				for (int i = 0; i < sim->particles.count; ++i) {
+					mc->tangled[i] &= (uint8_t)~TANGLED_NOW;
+				}
+				mc->tangle_check_due = true;
+			}
+			mc->tangle_count = 0;
+			mc->tangle_push_count = 0;
+		} else if (mc->active && mc->tangle_check_due && !plait_mesh_contacts_find_tangles(sim, mc)) {
 			return false;
 		}
 	}

@@ -317,6 +317,7 @@ typedef struct plait_settings {
 	float wind_noise;
 	uint32_t seed;
 	bool cloth_contacts;
+	bool untangle; /* search for crossings to undo (mesh_contact_untangle.c) */
 } plait_settings;
 
 typedef struct plait_sim {

@@ -28,6 +28,7 @@ plait_world_def plait_default_world_def(void)
 	def.space_scale = 1.0f;
 	def.time_scale = 1.0f;
 	def.cloth_contacts = true;
+	def.untangle = true;
 	def.worker_count = 1;
 	def.internal_value = PLAIT_DEF_MAGIC;
 	return def;
@@ -125,6 +126,7 @@ static void apply_settings(plait_world *world)
 	s->wind_noise = def->wind.noise;
 	s->seed = def->seed;
 	s->cloth_contacts = def->cloth_contacts;
+	s->untangle = def->untangle;
 	world->sim.schedule_dirty = true;
 }
 

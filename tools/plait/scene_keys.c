@@ -96,6 +96,7 @@ static const plait_scene_key plait_world_keys[] = {
     {"seed", PLAIT_KEY_UINT32, PLAIT_BETWEEN(0, 4294967295.0), offsetof(plait_world_def, seed), false, NULL,
      0},
     PLAIT_BOOL("cloth_contacts", plait_world_def, cloth_contacts),
+    PLAIT_BOOL("untangle", plait_world_def, untangle),
 };
 
 static const plait_scene_key plait_wind_keys[] = {
