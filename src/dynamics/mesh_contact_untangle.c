@@ -429,7 +429,7 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	mc->tangle_count = 0;
 	mc->tangle_push_count = 0;
-	/* Cloth triangles only: crossings with colliders are the collider pass's. */
+	/* The elements searched (cloth triangles and curve segments), counted. */
 	int triangles = 0;
 	for (int e = 0; e < mc->element_count; ++e) {
 		triangles += searched(sim, &mc->elements[e]);
@@ -493,20 +493,25 @@ bool plait_mesh_contacts_find_tangles(plait_sim *sim, plait_mesh_contacts *mc)
 		mc->was_tangled = false;
 	}
 	if (ok && pass.count > 0) {
-		for (int k = 0; k < pass.count; ++k) {
-			const tangle_crossing *c = &pass.crossings[k];
-			int v[5] = {c->a, c->b, c->target[0], c->target[1], c->target[2]};
-			for (int q = 0; q < 5; ++q) {
-				mc->tangled[v[q]] = TANGLED_NOW | TANGLED_EVER;
-			}
-		}
-		mc->tangle_count = pass.count;
 		mc->tangle_check_due = true; /* again at the next substep, until none is left */
 		mc->was_tangled = true;
-		mc->ever_tangled = true;
 		sim->tangles += pass.count;
 		ok = link_crossings(sim, mc, pass.crossings, pass.count) &&
 		     plan_pushes(sim, mc, pass.crossings, pass.count);
+		/* Pairs are exempt only with their links in place (out of memory, the frame fails). */
+		if (ok) {
+			for (int k = 0; k < pass.count; ++k) {
+				const tangle_crossing *c = &pass.crossings[k];
+				int v[5] = {c->a, c->b, c->target[0], c->target[1], c->target[2]};
+				for (int q = 0; q < 5; ++q) {
+					mc->tangled[v[q]] = TANGLED_NOW | TANGLED_EVER;
+				}
+			}
+			mc->tangle_count = pass.count;
+			mc->ever_tangled = true;
+		} else {
+			mc->tangle_push_count = 0;
+		}
 	}
 	plait_free(a, pass.crossings);
 	return ok;
