@@ -37,15 +37,6 @@ static void join_zone(plait_mesh_contacts *mc, const int *v, int n)
 	}
 }
 
-static int zone_root(int *parent, int i)
-{
-	while (parent[i] != i) {
-		parent[i] = parent[parent[i]];
-		i = parent[i];
-	}
-	return i;
-}
-
 static int compare_members(const void *a, const void *b)
 {
 	const int *x = a, *y = b;
@@ -242,7 +233,7 @@ static float pressed_depth(const plait_sim *sim, const plait_collider *c, int i,
 static bool moving_member(const plait_sim *sim, const plait_mesh_contacts *mc, int i, int root)
 {
 	return sim->particles.point[i].w > 0.0f && mc->zone_parent[i] >= 0 &&
-	       zone_root(mc->zone_parent, i) == root;
+	       plait_mesh_contacts_root(mc->zone_parent, i) == root;
 }
 
 #define EDGE_SEARCH_STEPS 24
@@ -973,7 +964,7 @@ void plait_mesh_contacts_failsafe(plait_sim *sim)
 		/* Zone by zone: members sorted by root. */
 		for (int k = 0; k < mc->touched_count; ++k) {
 			int i = mc->touched[k];
-			mc->members[k][0] = zone_root(mc->zone_parent, i);
+			mc->members[k][0] = plait_mesh_contacts_root(mc->zone_parent, i);
 			mc->members[k][1] = i;
 		}
 		qsort(mc->members, (size_t)mc->touched_count, sizeof *mc->members, compare_members);

@@ -415,6 +415,17 @@ typedef struct plait_mesh_contacts {
  * them (the failsafe sweeps around them); otherwise it is gathered again (or traversed). */
 #define STRAY_SHARE 8
 
+/* The root of i in a union-find forest (parent[i] == i at a root), halving the path on the way:
+ * impact zones (mesh_contact_failsafe.c) and a cloth's pieces (mesh_contact_untangle.c). */
+static inline int plait_mesh_contacts_root(int *parent, int i)
+{
+	while (parent[i] != i) {
+		parent[i] = parent[parent[i]];
+		i = parent[i];
+	}
+	return i;
+}
+
 /* Whether `strays` of `count` particles are few enough to mend (or sweep) around. */
 static inline bool plait_mesh_contacts_few_strays(int strays, int count)
 {

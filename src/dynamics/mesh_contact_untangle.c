@@ -245,15 +245,6 @@ static bool link_crossings(plait_sim *sim, plait_mesh_contacts *mc, const tangle
 	return true;
 }
 
-static int find_root(int *parent, int i)
-{
-	while (parent[i] != i) {
-		parent[i] = parent[parent[i]];
-		i = parent[i];
-	}
-	return i;
-}
-
 static int compare_keys(const void *a, const void *b)
 {
 	uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -345,7 +336,7 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 		for (int k = 0; k < (el->size == 3 ? 3 : 1); ++k) {
 			int u = el->v[k], w = el->v[(k + 1) % el->size];
 			if (!is_cut(cut, count, u, w)) {
-				int ru = find_root(parent, u), rw = find_root(parent, w);
+				int ru = plait_mesh_contacts_root(parent, u), rw = plait_mesh_contacts_root(parent, w);
 				if (ru != rw) {
 					parent[ru > rw ? ru : rw] = ru < rw ? ru : rw;
 				}
@@ -353,13 +344,13 @@ static bool plan_pushes(plait_sim *sim, plait_mesh_contacts *mc, const tangle_cr
 		}
 	}
 	for (int i = 0; i < n; ++i) {
-		size[find_root(parent, i)] += 1;
+		size[plait_mesh_contacts_root(parent, i)] += 1;
 	}
 	mc->tangle_push_count = 0;
 	bool ok = true;
 	for (int k = 0; k < count && ok; ++k) {
 		const tangle_crossing *c = &crossings[k];
-		int ra = find_root(parent, c->a), rb = find_root(parent, c->b);
+		int ra = plait_mesh_contacts_root(parent, c->a), rb = plait_mesh_contacts_root(parent, c->b);
 		bool a_smaller;
 		if (ra != rb) {
 			a_smaller = size[ra] < size[rb] || (size[ra] == size[rb] && ra > rb);
