@@ -12,10 +12,20 @@
 
 /* Radians: a face this steep against a feature's reference normal ends its smooth reach. */
 #define SMOOTH_STEEPEST 1.0f
+/* Its cosine, raised a little: a face turned this far or more is taken for a wall by the bound
+ * below (the rounding of acosf must not let through one that the measured faces stop at). */
+#define BOUND_STEEP_COS (0.54030231f + 1e-4f)
+/* Distance bins of that bound. */
+#define BOUND_BINS 32
 
+/* A face in reach of a feature: a lower bound on its distance (its ball's gap, for the faces
+ * not measured yet: candidates) or its measured distance and its angle (samples). */
 typedef struct face_sample {
-	float distance; /* from the feature, scene units (a lower bound) */
-	float angle;    /* against the feature's reference normal, radians */
+	float distance; /* from the feature, scene units (a lower bound); never negative */
+	union {
+		float angle;  /* samples: against the feature's reference normal, radians */
+		int triangle; /* candidates */
+	};
 } face_sample;
 
 typedef struct feature_query {
@@ -28,18 +38,25 @@ typedef struct feature_query {
 	bool corner;
 	vec3 normal; /* unit reference normal */
 	float range;
-	float first_share;    /* of the range, sampled first (smooth_reach) */
-	face_sample *samples; /* room for every triangle: a query meets each at most once */
-	face_sample *scratch; /* as much again, for the sort */
-	int count;
+	float budget;
+	/* Room for every triangle each (a query meets each at most once): the faces whose ball is
+	 * in range, and those of them measured. */
+	face_sample *candidates;
+	face_sample *samples;
+	int candidate_count, sample_count;
+	/* The bound (bound_reaches_range): per bin of BOUND_BINS over [0, range], the least cosine
+	 * against the normal of the faces whose ball comes that near; whether it already failed (a
+	 * wall in range, or one face enough to lift F past the budget). */
+	float bin_cos[BOUND_BINS];
+	float bins_per_unit;
+	bool bound_failed;
 } feature_query;
 
-/* Sorts samples by distance. The reach takes every face within a distance at once, so the order
- * of equal distances does not matter and any sort gives the same reaches. Distances are never
- * negative, so their bits order as they do: a radix sort, a byte at a time from the lowest
- * (bytes all samples share are skipped), through `scratch` (room for count); insertion sort
- * for a few. It was a fifth of a large smooth collider's set-up as a quicksort. */
-static void sort_samples(face_sample *s, face_sample *scratch, int count)
+/* Sorts by distance, through `scratch` (room for count). Distances are never negative, so their
+ * bits order as they do: a radix sort, a byte at a time from the lowest (bytes all share are
+ * skipped); insertion sort for a few. The reach takes every face within a distance at once, so
+ * the order of equal distances does not matter. */
+static void sort_by_distance(face_sample *s, face_sample *scratch, int count)
 {
 	if (count <= 32) {
 		for (int i = 1; i < count; ++i) {
@@ -112,101 +129,179 @@ static float feature_triangle_distance(vec3 a, vec3 b, bool corner, const vec3 *
 	return d;
 }
 
-static void sample_face(int triangle, void *context)
+/* A lower bound on the distance from q's feature to a triangle: to the centre of its ball, less
+ * its radius (less an allowance for the rounding of both measures). */
+static float ball_gap(const feature_query *q, int triangle)
 {
-	feature_query *q = context;
-	/* Faces whose ball is out of range are passed over before their distance: the distance
-	 * from the feature to the ball's centre, less its radius, bounds theirs from below (less
-	 * an allowance for the rounding of both measures). */
 	vec3 c = q->centre[triangle], ab = v3_sub(q->b, q->a);
 	float length_sq = v3_dot(ab, ab);
 	float s =
 	    length_sq > 0.0f ? plait_minf(plait_maxf(v3_dot(v3_sub(c, q->a), ab) / length_sq, 0.0f), 1.0f) : 0.0f;
 	float scale = 1.0f + largest_abs(c) + largest_abs(q->a) + largest_abs(q->b) + q->radius[triangle];
-	float beyond = v3_length(v3_sub(c, v3_mul_add(q->a, s, ab))) - q->radius[triangle] - 4e-6f * scale;
-	if (beyond > q->range + 1e-6f) {
+	return v3_length(v3_sub(c, v3_mul_add(q->a, s, ab))) - q->radius[triangle] - 4e-6f * scale;
+}
+
+/* The cosine of a face against q's normal; -1 (a wall) for an open or degenerate face. */
+static float face_cos(const feature_query *q, int triangle)
+{
+	vec3 n = q->shape->normals[triangle];
+	return !q->open[triangle] && v3_length_sq(n) > 0.0f ? v3_dot(n, q->normal) : -1.0f;
+}
+
+/* A face whose ball is in range becomes a candidate, keyed by a bound on its distance that its
+ * measure (measure_face) never falls below: the ball's gap, less the 1e-6 that measure takes
+ * off. It also goes into the bound's bins. */
+static void collect_face(int triangle, void *context)
+{
+	feature_query *q = context;
+	float gap = ball_gap(q, triangle);
+	if (gap > q->range + 1e-6f) {
 		return;
 	}
-	const int *tri = q->shape->triangles[triangle];
-	vec3 t[3] = {q->shape->positions[tri[0]], q->shape->positions[tri[1]], q->shape->positions[tri[2]]};
-	/* A face with a vertex of the feature is at 0 (what the measure gives, but for rounding on
-	 * needles: never more); the others less a rounding allowance, the distance must not be
-	 * overstated. A face with two vertices at one point has no closest point (0 / 0): its
-	 * ball's bound stands for its distance. */
-	bool touches = false;
-	for (int k = 0; k < 3; ++k) {
-		touches = touches || tri[k] == q->vertex_a || tri[k] == q->vertex_b;
+	float key = gap - 2e-6f;
+	q->candidates[q->candidate_count++] =
+	    (face_sample){.distance = key > 0.0f ? key : 0.0f, .triangle = triangle};
+	if (q->bound_failed) {
+		return;
 	}
+	float c = face_cos(q, triangle);
+	if (!(c > BOUND_STEEP_COS)) {
+		q->bound_failed = true;
+		return;
+	}
+	/* Alone, from where it comes in to the range's end, this face may already lift F past the
+	 * budget: then the bound fails. */
+	float slope = sqrtf(plait_maxf(0.0f, 1.0f - c * c)) / c;
+	if (slope * (q->range - plait_maxf(gap, q->budget)) >= 0.99f * q->budget) {
+		q->bound_failed = true;
+		return;
+	}
+	int bin = gap > 0.0f ? (int)(gap * q->bins_per_unit) : 0;
+	bin = bin < BOUND_BINS ? bin : BOUND_BINS - 1;
+	q->bin_cos[bin] = plait_minf(q->bin_cos[bin], c);
+}
+
+/* Whether the feature reaches the whole range by the bound, which measures no face: each is
+ * taken to be as near as its ball's gap rounded down to its bin's start and to turn at least
+ * as far, so that its F grows no slower than the measured faces' and stays under the budget
+ * (with a margin for rounding) only where theirs does. On a mesh smooth at the range's scale
+ * it passes most features; their faces' distances (closest points) are most of the cost. */
+static bool bound_reaches_range(const feature_query *q)
+{
+	if (q->bound_failed) {
+		return false;
+	}
+	/* The faces of bin b come in at t = b w - budget; F is the integral of the steepest slope
+	 * so far, up to D = range - budget. */
+	float width = q->range / (float)BOUND_BINS, end_of_range = q->range - q->budget;
+	float t = 0.0f, fall = 0.0f, least_cos = 1.0f;
+	for (int b = 0; b < BOUND_BINS && t < end_of_range; ++b) {
+		least_cos = plait_minf(least_cos, q->bin_cos[b]);
+		float until = plait_minf(end_of_range, (float)(b + 1) * width - q->budget);
+		if (until > t) {
+			float slope = sqrtf(plait_maxf(0.0f, 1.0f - least_cos * least_cos)) / least_cos;
+			fall += (1.001f * slope + 1e-6f) * (until - t);
+			t = until;
+		}
+	}
+	return fall < 0.99f * q->budget;
+}
+
+/* Measures candidate c: a sample unless farther than the range. A face with a vertex of the
+ * feature is at 0 (what the measure gives, but for rounding on needles: never more); the others
+ * less a rounding allowance, the distance must not be overstated. A face with two vertices at
+ * one point has no closest point (0 / 0): its ball's gap stands for its distance. Samples from
+ * index `sorted` on are kept in order of distance (the new one is put in its place). */
+static void measure_face(feature_query *q, int c, int sorted)
+{
+	int triangle = q->candidates[c].triangle;
+	const int *tri = q->shape->triangles[triangle];
 	float distance = 0.0f;
-	if (!touches) {
+	if (tri[0] != q->vertex_a && tri[1] != q->vertex_a && tri[2] != q->vertex_a && tri[0] != q->vertex_b &&
+	    tri[1] != q->vertex_b && tri[2] != q->vertex_b) {
+		vec3 t[3] = {q->shape->positions[tri[0]], q->shape->positions[tri[1]], q->shape->positions[tri[2]]};
 		float measured = feature_triangle_distance(q->a, q->b, q->corner, t);
-		distance = plait_maxf((isnan(measured) ? beyond : measured) - 1e-6f, 0.0f);
+		distance = plait_maxf((isnan(measured) ? ball_gap(q, triangle) : measured) - 1e-6f, 0.0f);
 	}
 	if (distance > q->range) {
 		return;
 	}
-	vec3 n = q->shape->normals[triangle];
-	float angle = SMOOTH_STEEPEST; /* open or degenerate: a wall */
-	if (!q->open[triangle] && v3_length_sq(n) > 0.0f) {
-		angle = acosf(plait_maxf(-1.0f, plait_minf(1.0f, v3_dot(n, q->normal))));
+	float angle = acosf(plait_maxf(-1.0f, plait_minf(1.0f, face_cos(q, triangle)))); /* a wall: pi */
+	int j = q->sample_count++;
+	for (; j > sorted && q->samples[j - 1].distance > distance; --j) {
+		q->samples[j] = q->samples[j - 1];
 	}
-	q->samples[q->count++] = (face_sample){distance, angle};
+	q->samples[j] = (face_sample){.distance = distance, .angle = angle};
 }
 
-/* The longest cloth edge D for which F(D) < budget (M above), for the feature of q with its
- * faces within q->range sampled; at most q->range - budget (farther faces are not known). */
-static float reach_within(feature_query *q, float budget, float range)
+/* The longest cloth edge D for which F(D) < budget (M above), at most range - budget (farther
+ * faces are not looked at), or 0 from the first wall. Walks out from the feature as the faces
+ * come within t + budget, measuring them only as far as the walk needs: candidates in order of
+ * their keys, each a bound on its distance, so that once the next candidate's key is past a
+ * distance every face within it is a sample. Where the reach ends short of the range (a mesh
+ * curved at the cloth's scale) the faces beyond are never measured. */
+static float walk_out(feature_query *q)
 {
-	vec3 lower = v3_min(q->a, q->b), upper = v3_max(q->a, q->b);
-	vec3 grow = v3(range, range, range);
-	q->count = 0;
-	float full = q->range;
-	q->range = range;
-	plait_mesh_shape_visit(q->shape, v3_sub(lower, grow), v3_add(upper, grow), true, sample_face, q);
-	q->range = full;
-	sort_samples(q->samples, q->scratch, q->count);
-	/* A(t) steps up as faces come within t + budget; F grows by tan A over each step. */
+	float budget = q->budget;
+	int next = 0, k = 0; /* the next candidate to measure, the next sample to come in */
+	q->sample_count = 0;
 	float t = 0.0f, fall = 0.0f, steepest = 0.0f;
-	int k = 0;
 	for (;;) {
-		while (k < q->count && q->samples[k].distance - budget <= t) {
+		/* Every face within t + budget measured: */
+		while (next < q->candidate_count && q->candidates[next].distance - budget <= t) {
+			measure_face(q, next++, k);
+		}
+		while (k < q->sample_count && q->samples[k].distance - budget <= t) {
 			steepest = plait_maxf(steepest, q->samples[k].angle);
 			++k;
 		}
 		if (steepest >= SMOOTH_STEEPEST) {
 			return t;
 		}
-		float next = k < q->count ? q->samples[k].distance - budget : range - budget;
+		/* The next face to come in: the nearest sample left once no candidate could be nearer
+		 * (measuring one may put a nearer sample first). */
+		for (;;) {
+			if (k < q->sample_count && next < q->candidate_count &&
+			    q->candidates[next].distance <= q->samples[k].distance) {
+				measure_face(q, next++, k);
+			} else if (k == q->sample_count && next < q->candidate_count) {
+				measure_face(q, next++, k);
+			} else {
+				break;
+			}
+		}
+		float end = q->range - budget;
+		float step_to = k < q->sample_count ? q->samples[k].distance - budget : end;
 		float slope = tanf(steepest);
-		if (fall + slope * (next - t) >= budget) {
+		if (fall + slope * (step_to - t) >= budget) {
 			return t + (budget - fall) / slope;
 		}
-		if (k >= q->count) {
-			return next;
+		if (k >= q->sample_count) {
+			return step_to;
 		}
-		fall += slope * (next - t);
-		t = next;
+		fall += slope * (step_to - t);
+		t = step_to;
 	}
 }
 
-/* The same over q->range, sampled in widening rounds: on a sharp mesh most reaches end well
- * inside it. A reach that ends inside a round's range is the whole range's (the faces beyond
- * come after it), so the rounds change only the cost: where the last feature's reach went
- * past a quarter of the range (a smooth mesh, its reaches long), the next starts with the whole
- * range. Chunks of features start afresh at fixed features (SHARE_BLOCK), so that no result can
- * depend on how the features were cut for the workers. */
-static float smooth_reach(feature_query *q, float budget)
+/* The smooth reach of q's feature: faces in range collected once (a box query), then the bound,
+ * then, where it fails, the walk. */
+static float smooth_reach(feature_query *q)
 {
-	float quarter = 0.25f * (q->range - budget);
-	float range = budget + q->first_share * (q->range - budget);
-	for (;;) {
-		float reach = reach_within(q, budget, range);
-		if (reach < 0.999f * (range - budget) || range >= q->range) {
-			q->first_share = reach >= 0.999f * quarter ? 1.0f : 0.25f;
-			return reach;
-		}
-		range = plait_minf(q->range, budget + 2.0f * (range - budget));
+	vec3 lower = v3_min(q->a, q->b), upper = v3_max(q->a, q->b);
+	vec3 grow = v3(q->range, q->range, q->range);
+	q->candidate_count = 0;
+	for (int b = 0; b < BOUND_BINS; ++b) {
+		q->bin_cos[b] = 1.0f;
 	}
+	q->bins_per_unit = (float)BOUND_BINS / q->range;
+	q->bound_failed = false;
+	plait_mesh_shape_visit(q->shape, v3_sub(lower, grow), v3_add(upper, grow), true, collect_face, q);
+	if (bound_reaches_range(q)) {
+		return q->range - q->budget;
+	}
+	sort_by_distance(q->candidates, q->samples, q->candidate_count); /* none measured yet */
+	return walk_out(q);
 }
 
 /* How far a feature's faces need sampling: F(D) >= D tan A(0), and A(0) is at least the angle
@@ -229,9 +324,6 @@ static vec3 reference_normal(vec3 sum, int count)
 	return length > 0.5f * (float)count ? v3_scale(sum, 1.0f / length) : v3(0.0f, 0.0f, 0.0f);
 }
 
-/* Features measured in a row from a fresh start (smooth_reach); chunks hold whole blocks. */
-#define SHARE_BLOCK 64
-
 /* Features are measured side by side on the workers, a chunk each with its own samples (each
  * feature's reach depends only on the shape, so the results are the same on any number). */
 typedef struct reach_job {
@@ -252,8 +344,8 @@ static feature_query chunk_query(const reach_job *job, int begin)
 {
 	feature_query q = job->base;
 	size_t room = (size_t)job->base.shape->triangle_count;
-	q.samples = job->samples + (size_t)(begin / job->grain) * 2 * room;
-	q.scratch = q.samples + room;
+	q.candidates = job->samples + (size_t)(begin / job->grain) * 2 * room;
+	q.samples = q.candidates + room;
 	return q;
 }
 
@@ -264,7 +356,6 @@ static void edge_reaches(void *context, int begin, int end)
 	const plait_mesh_shape *shape = q.shape;
 	float range = q.range;
 	for (int r = begin; r < end; ++r) {
-		q.first_share = r % SHARE_BLOCK == 0 ? 0.25f : q.first_share;
 		const plait_triangle_edge *edge = &job->edges[job->runs[r]];
 		q.a = shape->positions[edge[0].low];
 		q.b = shape->positions[edge[0].high];
@@ -274,7 +365,7 @@ static void edge_reaches(void *context, int begin, int end)
 		q.normal =
 		    reference_normal(v3_add(shape->normals[edge[0].triangle], shape->normals[edge[1].triangle]), 2);
 		q.range = capped_range(range, job->budget, v3_dot(q.normal, shape->normals[edge[0].triangle]));
-		job->edge_reach[job->runs[r]] = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, job->budget) : -1.0f;
+		job->edge_reach[job->runs[r]] = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q) : -1.0f;
 	}
 }
 
@@ -285,7 +376,6 @@ static void corner_reaches(void *context, int begin, int end)
 	const plait_mesh_shape *shape = q.shape;
 	float range = q.range;
 	for (int v = begin; v < end; ++v) {
-		q.first_share = v % SHARE_BLOCK == 0 ? 0.25f : q.first_share;
 		if (job->star[v] == 0 || !(job->vertex_reach[v] > 0.0f)) {
 			continue;
 		}
@@ -294,7 +384,7 @@ static void corner_reaches(void *context, int begin, int end)
 		q.corner = true;
 		q.normal = reference_normal(job->normals[v], job->star[v]);
 		q.range = capped_range(range, job->budget, job->star_cos[v]);
-		float reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q, job->budget) : -1.0f;
+		float reach = v3_length_sq(q.normal) > 0.0f ? smooth_reach(&q) : -1.0f;
 		job->vertex_reach[v] = plait_minf(job->vertex_reach[v], reach);
 	}
 }
@@ -313,12 +403,11 @@ static void run_chunks(plait_parallel *parallel, plait_range_fn *fn, void *conte
 #define CHUNKS_PER_WORKER 4
 #define MOST_CHUNKS 64
 
-/* Features [0, count) cut into at most `chunks` chunks of whole blocks. */
-static int block_grain(int count, int chunks)
+/* Features [0, count) cut into at most `chunks` chunks. */
+static int chunk_grain(int count, int chunks)
 {
 	int per_chunk = (count + chunks - 1) / chunks;
-	int blocks = (per_chunk + SHARE_BLOCK - 1) / SHARE_BLOCK;
-	return (blocks > 0 ? blocks : 1) * SHARE_BLOCK;
+	return per_chunk > 0 ? per_chunk : 1;
 }
 
 bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *a,
@@ -397,7 +486,7 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 		                          .centre = centre,
 		                          .radius = radius,
 		                          .range = range,
-		                          .first_share = 0.25f},
+		                          .budget = budget},
 		                 .budget = budget,
 		                 .edges = edges,
 		                 .runs = runs,
@@ -408,14 +497,14 @@ bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_alloca
 		                 .vertex_reach = vertex_reach,
 		                 .samples = samples};
 		/* Edges first: a corner is kept whenever an edge of it is. */
-		job.grain = block_grain(run_count, chunks);
+		job.grain = chunk_grain(run_count, chunks);
 		run_chunks(parallel, edge_reaches, &job, run_count, job.grain);
 		for (int r = 0; r < run_count; ++r) {
 			const plait_triangle_edge *edge = &edges[runs[r]];
 			vertex_reach[edge->low] = plait_minf(vertex_reach[edge->low], edge_reach[runs[r]]);
 			vertex_reach[edge->high] = plait_minf(vertex_reach[edge->high], edge_reach[runs[r]]);
 		}
-		job.grain = block_grain(nv, chunks);
+		job.grain = chunk_grain(nv, chunks);
 		run_chunks(parallel, corner_reaches, &job, nv, job.grain);
 		memcpy(vertex_reach_out, vertex_reach, sizeof(float) * (size_t)nv);
 		for (int t = 0; t < nt; ++t) {

@@ -19,10 +19,12 @@
  * at most range - budget (faces farther than range from a feature are not looked at). False
  * only when out of memory (then nothing is written). Features are measured on the workers of
  * `parallel` (NULL: on the calling thread), with the same results on any number. Costs grow
- * with the faces within range of each feature: on one thread the first step of bench_collide
- * hang-self (16 mm cloth triangles over a sphere of radius 0.5) takes 0.16 s with a 4,900-
- * triangle sphere, about 1 s with 20,000 triangles and 10 s with 80,000 (--sphere-slices 50,
- * 100, 200; 12 s before the samples' radix sort), most of it here. */
+ * with the faces within range of each feature, and within its reach where that ends sooner:
+ * on one thread, at hang-self's budget and range (bench_mesh_queries --reaches), 45 ms for a
+ * sphere of radius 0.5 m in 4,900 triangles, 0.55 s in 19,800 and 2.7 s in 79,600 (most of
+ * its features smooth over the whole range, passed by a bound without measuring their faces);
+ * 8 s for a sphere of radius 5 cm in 19,800 (a limb: reaches end early, but every face within
+ * them is measured). */
 bool plait_mesh_smooth_reaches(const plait_mesh_shape *shape, const plait_allocator *allocator,
                                plait_parallel *parallel, float budget, float range, float *vertex_reach,
                                float *edge_reach);
