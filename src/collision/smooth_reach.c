@@ -99,11 +99,6 @@ static void sort_by_distance(face_sample *s, face_sample *scratch, int count)
 	}
 }
 
-static float largest_abs(vec3 v)
-{
-	return plait_maxf(fabsf(v.x), plait_maxf(fabsf(v.y), fabsf(v.z)));
-}
-
 /* The distance from a corner or edge to a triangle (an edge through the triangle is at 0). */
 static float feature_triangle_distance(vec3 a, vec3 b, bool corner, const vec3 *t)
 {
@@ -137,7 +132,7 @@ static float ball_gap(const feature_query *q, int triangle)
 	float length_sq = v3_dot(ab, ab);
 	float s =
 	    length_sq > 0.0f ? plait_minf(plait_maxf(v3_dot(v3_sub(c, q->a), ab) / length_sq, 0.0f), 1.0f) : 0.0f;
-	float scale = 1.0f + largest_abs(c) + largest_abs(q->a) + largest_abs(q->b) + q->radius[triangle];
+	float scale = 1.0f + v3_largest_abs(c) + v3_largest_abs(q->a) + v3_largest_abs(q->b) + q->radius[triangle];
 	return v3_length(v3_sub(c, v3_mul_add(q->a, s, ab))) - q->radius[triangle] - 4e-6f * scale;
 }
 

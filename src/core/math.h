@@ -115,6 +115,12 @@ static inline bool v3_is_finite(vec3 a)
 {
 	return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
 }
+/* The largest of a vector's coordinates in size (its infinity norm). */
+static inline float v3_largest_abs(vec3 a)
+{
+	return plait_maxf(fabsf(a.x), plait_maxf(fabsf(a.y), fabsf(a.z)));
+}
+
 static inline vec3 v3_min(vec3 a, vec3 b)
 {
 	return (vec3){plait_minf(a.x, b.x), plait_minf(a.y, b.y), plait_minf(a.z, b.z)};
