@@ -27,6 +27,8 @@
  *                      [--coarse-floor] (pile: onto a coarse sheet of 3 x 3 vertices)
  *                      [--substeps S] (with --stiff: S substeps of one sweep each, not 6)
  *                      [--sphere-slices S] (hang-self: the sphere mesh's slices and stacks, 50)
+ *                      [--sphere-radius R] (hang-self: the sphere's radius, 0.5 m; its top stays
+ *                       where it was)
  *                      [--window FIRST LAST] (also the mean ms and collision ms a frame over
  *                       frames FIRST to LAST, e.g. hang-self --stiff falling free: 2 12)
  *                      [--verbose] (frames with crossings or vertices inside colliders)
@@ -223,6 +225,8 @@ int main(int argc, char **argv)
 			options.stiff_substeps = options.stiff_substeps > 0 ? options.stiff_substeps : -1;
 		} else if (strcmp(argv[a], "--sphere-slices") == 0 && a + 1 < argc) {
 			options.sphere_slices = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--sphere-radius") == 0 && a + 1 < argc) {
+			options.sphere_radius = (float)atof(argv[++a]);
 		} else if (strcmp(argv[a], "--verbose") == 0) {
 			verbose = true;
 		} else if (strcmp(argv[a], "--per-frame") == 0) {

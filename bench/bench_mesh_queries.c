@@ -109,6 +109,10 @@ static int bench_reaches(const plait_mesh_shape *shape, const plait_allocator *h
 	double ms = 1e3 * (now_seconds() - start);
 	uint64_t hash = 1469598103934665603ull;
 	int full = 0;
+	double sum = 0.0;
+	for (int e = 0; e < ne; ++e) {
+		sum += edge[e] > 0.0f ? edge[e] : 0.0f;
+	}
 	for (int k = 0; k < nv + ne; ++k) {
 		float r = k < nv ? vertex[k] : edge[k - nv];
 		uint32_t bits;
@@ -116,8 +120,9 @@ static int bench_reaches(const plait_mesh_shape *shape, const plait_allocator *h
 		hash = (hash ^ bits) * 1099511628211ull;
 		full += k >= nv && r >= 0.999f * (range - budget);
 	}
-	printf("triangles=%d reaches_ms=%.1f full_edges=%.3f reaches=%016llx\n", shape->triangle_count, ms,
-	       (double)full / (double)ne, (unsigned long long)hash);
+	printf("triangles=%d reaches_ms=%.1f full_edges=%.3f mean_edge_mm=%.2f reaches=%016llx\n",
+	       shape->triangle_count, ms, (double)full / (double)ne, 1e3 * sum / (double)ne,
+	       (unsigned long long)hash);
 	free(vertex);
 	free(edge);
 	return 0;

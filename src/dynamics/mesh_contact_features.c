@@ -29,7 +29,9 @@
  * = (sum over i < j of l_i l_j |v_i - v_j|^2)^1/2 <= D / sqrt(3): m <= F(D) / sqrt(3), false when
  * F(D) < M. Where F(D) < M, then, f touches no cloth triangle (or segment) with edges up to D at
  * the end of a substep and needs no contacts with it. plait_mesh_smooth_reaches
- * (collision/smooth_reach.c) finds, per corner and edge, the largest such D: its smooth reach.
+ * (collision/smooth_reach.c) finds, per corner and edge, such a D: its smooth reach (the
+ * largest, or on a fine mesh a little less, found with a cluster of features and its normal
+ * for n0; any n0 serves the argument while A stays under a radian).
  *
  * A crossing of T and the collider at the end of a substep needs a collider edge through T (a
  * straight cut of T by one face would leave a vertex of T inside), an edge that can touch T:

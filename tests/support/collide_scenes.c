@@ -447,7 +447,8 @@ static bool build(collide_scene *scene, int n, plait_error *error)
 		n = n > 0 ? n : 128;
 		scene->frames = 300;
 		int slices = scene->options.sphere_slices > 0 ? scene->options.sphere_slices : 50;
-		mesh ball = sphere_mesh(slices, slices, 0.5f, (plait_vec3){0.0f, -0.75f, 0.0f});
+		float radius = scene->options.sphere_radius > 0.0f ? scene->options.sphere_radius : 0.5f;
+		mesh ball = sphere_mesh(slices, slices, radius, (plait_vec3){0.0f, -0.25f - radius, 0.0f});
 		plait_collider_def sphere = plait_default_collider_def();
 		sphere.name = "sphere mesh";
 		sphere.shape = PLAIT_SHAPE_MESH;

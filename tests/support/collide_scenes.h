@@ -32,6 +32,8 @@ typedef struct collide_scene_options {
 	bool stiff;
 	/* hang-self: the sphere mesh's slices and stacks (0: 50, about 4,900 triangles) */
 	int sphere_slices;
+	/* hang-self: the sphere's radius, m (0: 0.5); its top stays 25 cm under the cloth */
+	float sphere_radius;
 	/* hang-self with stiff: substeps a frame, one sweep of each constraint kind in each (0: 6).
 	 * A finer cloth needs more to hold together as well as a coarser one (bench_hang). */
 	int stiff_substeps;
