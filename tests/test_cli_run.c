@@ -80,6 +80,35 @@ static int count_lines_starting(const char *text, const char *prefix)
 	return count;
 }
 
+/* The lines of DIR/stats.jsonl, each parsed (the test fails on a line that is not JSON);
+ * *count receives how many. Free with free_stats. */
+static json_t **load_stats(const char *dir, int *count)
+{
+	char path[1024];
+	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
+	char *text = read_file(path, NULL);
+	cr_assert_not_null(text, "no %s", path);
+	json_t **lines = calloc((size_t)count_lines_starting(text, "{") + 1, sizeof *lines);
+	int n = 0;
+	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
+		json_error_t error;
+		lines[n] = json_loads(line, 0, &error);
+		cr_assert_not_null(lines[n], "line %d is not JSON: %s", n, line);
+		++n;
+	}
+	free(text);
+	*count = n;
+	return lines;
+}
+
+static void free_stats(json_t **lines, int count)
+{
+	for (int k = 0; k < count; ++k) {
+		json_decref(lines[k]);
+	}
+	free(lines);
+}
+
 Test(cli_run, obj_output_names_and_contents)
 {
 	char *dir = make_temp_dir();
@@ -210,22 +239,14 @@ Test(cli_run, check_adds_intersection_counts_to_stats)
 	const char *argv[] = {"plait", "run", scene, "--out", dir, "--frames", "3", "--check"};
 	cli_result r = run_cli(8, argv);
 	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
-	char path[1024];
-	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
-	char *text = read_file(path, NULL);
-	cr_assert_not_null(text);
-	int lines = 0;
-	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
-		json_error_t error;
-		json_t *json = json_loads(line, 0, &error);
-		cr_assert_not_null(json, "line %d is not JSON: %s", lines, line);
-		cr_expect(json_is_integer(json_object_get(json, "intersections")), "line %d: %s", lines, line);
-		cr_expect(json_is_integer(json_object_get(json, "inside_colliders")), "line %d: %s", lines, line);
-		json_decref(json);
-		++lines;
+	int lines;
+	json_t **stats = load_stats(dir, &lines);
+	for (int k = 0; k < lines; ++k) {
+		cr_expect(json_is_integer(json_object_get(stats[k], "intersections")), "line %d", k);
+		cr_expect(json_is_integer(json_object_get(stats[k], "inside_colliders")), "line %d", k);
 	}
 	cr_expect_eq(lines, 4);
-	free(text);
+	free_stats(stats, lines);
 	free_result(&r);
 	free(scene);
 	remove_tree(dir);
@@ -492,30 +513,21 @@ Test(cli_run, the_tablecloth_example_drapes_clean_over_a_mesh_table)
 	                      "--out", dir,   "--check"};
 	cli_result r = run_cli(6, argv);
 	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
-	char path[1024];
-	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
-	char *text = read_file(path, NULL);
-	cr_assert_not_null(text);
-	int lines = 0;
-	double last_strain = 0.0;
-	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
-		json_error_t error;
-		json_t *json = json_loads(line, 0, &error);
-		cr_assert_not_null(json, "line %d is not JSON: %s", lines, line);
-		int frame = (int)json_integer_value(json_object_get(json, "frame"));
-		cr_expect_eq(json_integer_value(json_object_get(json, "intersections")), 0, "frame %d crosses",
-		             frame);
-		cr_expect_eq(json_integer_value(json_object_get(json, "inside_colliders")), 0,
-		             "frame %d: vertices inside the table", frame);
-		last_strain = json_real_value(json_object_get(json, "max_strain"));
-		json_decref(json);
-		++lines;
+	int lines;
+	json_t **stats = load_stats(dir, &lines);
+	for (int k = 0; k < lines; ++k) {
+		cr_expect_eq(json_integer_value(json_object_get(stats[k], "intersections")), 0, "frame %d crosses",
+		             k);
+		cr_expect_eq(json_integer_value(json_object_get(stats[k], "inside_colliders")), 0,
+		             "frame %d: vertices inside the table", k);
 	}
-	free(text);
-	cr_expect_eq(lines, 73);
+	cr_assert_eq(lines, 73);
+	double last_strain = json_real_value(json_object_get(stats[lines - 1], "max_strain"));
+	free_stats(stats, lines);
 	cr_expect_lt(last_strain, 0.2, "edges stretched by %g at the end", last_strain);
+	char path[1024];
 	snprintf(path, sizeof path, "%s/tablecloth.0072.obj", dir);
-	text = read_file(path, NULL);
+	char *text = read_file(path, NULL);
 	cr_assert_not_null(text, "no %s", path);
 	int on_top = 0, hanging = 0;
 	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
@@ -542,19 +554,13 @@ Test(cli_run, the_tangled_layers_example_comes_apart)
 	                      "--out", dir,   "--check"};
 	cli_result r = run_cli(6, argv);
 	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
-	char path[1024];
-	snprintf(path, sizeof path, "%s/stats.jsonl", dir);
-	char *text = read_file(path, NULL);
-	cr_assert_not_null(text);
-	int lines = 0, first_clean = -1;
+	int lines, first_clean = -1;
+	json_t **stats = load_stats(dir, &lines);
 	long tangles = 0;
-	for (char *line = strtok(text, "\n"); line != NULL; line = strtok(NULL, "\n")) {
-		json_error_t error;
-		json_t *json = json_loads(line, 0, &error);
-		cr_assert_not_null(json, "line %d is not JSON: %s", lines, line);
-		int frame = (int)json_integer_value(json_object_get(json, "frame"));
-		int crossings = (int)json_integer_value(json_object_get(json, "intersections"));
-		tangles += json_integer_value(json_object_get(json, "tangles"));
+	for (int k = 0; k < lines; ++k) {
+		int frame = (int)json_integer_value(json_object_get(stats[k], "frame"));
+		int crossings = (int)json_integer_value(json_object_get(stats[k], "intersections"));
+		tangles += json_integer_value(json_object_get(stats[k], "tangles"));
 		if (frame == 0) {
 			cr_expect_gt(crossings, 0, "the example should begin tangled");
 		} else if (first_clean < 0 && crossings == 0) {
@@ -563,13 +569,11 @@ Test(cli_run, the_tangled_layers_example_comes_apart)
 			cr_expect_eq(crossings, 0, "frame %d: %d crossing pairs after frame %d was clean", frame,
 			             crossings, first_clean);
 		}
-		json_decref(json);
-		++lines;
 	}
+	free_stats(stats, lines);
 	cr_expect_eq(lines, 49);
 	cr_expect_gt(tangles, 0, "no tangles found");
 	cr_expect(first_clean > 0 && first_clean <= 6, "first frame free of crossings: %d", first_clean);
-	free(text);
 	free_result(&r);
 	remove_tree(dir);
 	free(dir);
