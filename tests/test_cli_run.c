@@ -109,6 +109,26 @@ static void free_stats(json_t **lines, int count)
 	free(lines);
 }
 
+/* Runs `plait run SCENE --out DIR --check` (SCENE NULL: the built-in demo) and expects every frame
+ * of its stats.jsonl free of crossing triangle pairs and of vertices inside colliders (`what`
+ * names the run in messages). Returns the stats (free_stats); *count receives their lines. */
+static json_t **run_clean(const char *scene, const char *dir, const char *what, int *count)
+{
+	const char *with_scene[] = {"plait", "run", scene, "--out", dir, "--check"};
+	const char *demo[] = {"plait", "run", "--out", dir, "--check"};
+	cli_result r = scene != NULL ? run_cli(6, with_scene) : run_cli(5, demo);
+	cr_assert_eq(r.code, 0, "%s: %s", what, r.err);
+	free_result(&r);
+	json_t **stats = load_stats(dir, count);
+	for (int k = 0; k < *count; ++k) {
+		cr_expect_eq(json_integer_value(json_object_get(stats[k], "intersections")), 0,
+		             "%s: frame %d crosses", what, k);
+		cr_expect_eq(json_integer_value(json_object_get(stats[k], "inside_colliders")), 0,
+		             "%s: frame %d has vertices inside a collider", what, k);
+	}
+	return stats;
+}
+
 Test(cli_run, obj_output_names_and_contents)
 {
 	char *dir = make_temp_dir();
@@ -507,23 +527,15 @@ Test(cli_run, binary_exit_codes)
 Test(cli_run, the_built_in_demo_drapes_without_crossing_itself)
 {
 	char *dir = make_temp_dir();
-	const char *argv[] = {"plait", "run", "--out", dir, "--check"};
-	cli_result r = run_cli(5, argv);
-	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
 	int lines;
-	json_t **stats = load_stats(dir, &lines);
+	json_t **stats = run_clean(NULL, dir, "the demo", &lines);
 	cr_expect_eq(lines, 121);
 	long contacts = 0;
 	for (int k = 0; k < lines; ++k) {
-		cr_expect_eq(json_integer_value(json_object_get(stats[k], "intersections")), 0, "frame %d crosses",
-		             k);
-		cr_expect_eq(json_integer_value(json_object_get(stats[k], "inside_colliders")), 0,
-		             "frame %d: vertices inside the sphere", k);
 		contacts += json_integer_value(json_object_get(stats[k], "contacts"));
 	}
 	cr_expect_gt(contacts, 0, "the cloth never touched anything");
 	free_stats(stats, lines);
-	free_result(&r);
 	remove_tree(dir);
 	free(dir);
 }
@@ -545,19 +557,9 @@ Test(cli_run, the_shipped_scenes_never_cross)
 		char scene[1024];
 		snprintf(scene, sizeof scene, "%s/scenes/%s", PLAIT_SOURCE_DIR, entry->d_name);
 		char *dir = make_temp_dir();
-		const char *argv[] = {"plait", "run", scene, "--out", dir, "--check"};
-		cli_result r = run_cli(6, argv);
-		cr_assert_eq(r.code, 0, "%s: %s", entry->d_name, r.err);
 		int lines;
-		json_t **stats = load_stats(dir, &lines);
-		for (int k = 0; k < lines; ++k) {
-			cr_expect_eq(json_integer_value(json_object_get(stats[k], "intersections")), 0,
-			             "%s: frame %d crosses", entry->d_name, k);
-			cr_expect_eq(json_integer_value(json_object_get(stats[k], "inside_colliders")), 0,
-			             "%s: frame %d has vertices inside a collider", entry->d_name, k);
-		}
+		json_t **stats = run_clean(scene, dir, entry->d_name, &lines);
 		free_stats(stats, lines);
-		free_result(&r);
 		remove_tree(dir);
 		free(dir);
 		++ran;
@@ -575,18 +577,8 @@ Test(cli_run, the_shipped_scenes_never_cross)
 Test(cli_run, the_tablecloth_example_drapes_clean_over_a_mesh_table)
 {
 	char *dir = make_temp_dir();
-	const char *argv[] = {"plait", "run", PLAIT_SOURCE_DIR "/examples/tablecloth.json",
-	                      "--out", dir,   "--check"};
-	cli_result r = run_cli(6, argv);
-	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
 	int lines;
-	json_t **stats = load_stats(dir, &lines);
-	for (int k = 0; k < lines; ++k) {
-		cr_expect_eq(json_integer_value(json_object_get(stats[k], "intersections")), 0, "frame %d crosses",
-		             k);
-		cr_expect_eq(json_integer_value(json_object_get(stats[k], "inside_colliders")), 0,
-		             "frame %d: vertices inside the table", k);
-	}
+	json_t **stats = run_clean(PLAIT_SOURCE_DIR "/examples/tablecloth.json", dir, "tablecloth", &lines);
 	cr_assert_eq(lines, 73);
 	double last_strain = json_real_value(json_object_get(stats[lines - 1], "max_strain"));
 	free_stats(stats, lines);
@@ -606,7 +598,6 @@ Test(cli_run, the_tablecloth_example_drapes_clean_over_a_mesh_table)
 	cr_expect_gt(on_top, 500, "%d vertices on the table top", on_top);
 	cr_expect_gt(hanging, 300, "%d vertices hanging over the rim", hanging);
 	free(text);
-	free_result(&r);
 	remove_tree(dir);
 	free(dir);
 }
