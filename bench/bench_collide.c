@@ -38,6 +38,8 @@
  *                      .variant 0..K-1: a line each, then their median, least and most ms; a
  *                      change judged on one start of a chaotic scene (folds, a pile) is judged
  *                      on where its cloth happened to fall)
+ *                      [--contact-passes K] (the world's contact_pass_interval: a contact pass
+ *                       at least every K stretch iterations; 0 none, the default)
  *   SCENE: drape thin-box pile twist arm hang-self (default: all)
  */
 #include <stdint.h>
@@ -240,6 +242,12 @@ int main(int argc, char **argv)
 			}
 		} else if (strcmp(argv[a], "--variants") == 0 && a + 1 < argc) {
 			variants = atoi(argv[++a]);
+		} else if (strcmp(argv[a], "--contact-passes") == 0 && a + 1 < argc) {
+			options.contact_pass_interval = atoi(argv[++a]);
+			if (options.contact_pass_interval < 0) {
+				fprintf(stderr, "bench_collide: --contact-passes takes an interval >= 0\n");
+				return 2;
+			}
 		} else {
 			int k = 0;
 			while (k < SCENE_COUNT && strcmp(argv[a], collide_scene_names[k]) != 0) {
@@ -253,7 +261,7 @@ int main(int argc, char **argv)
 				        "[--coarse-floor] [--substeps S] "
 				        "[--sphere-slices S] "
 				        "[--verbose] "
-				        "[--per-frame] [--window FIRST LAST] [--variants K]\n"
+				        "[--per-frame] [--window FIRST LAST] [--variants K] [--contact-passes K]\n"
 				        "  SCENE: drape thin-box pile twist arm hang-self\n");
 				return 2;
 			}

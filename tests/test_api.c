@@ -22,6 +22,10 @@ Test(api, world_def_is_validated)
 	cr_assert(plait_world_id_is_null(plait_create_world(&def, &error)));
 	ASSERT_MESSAGE(error, "fps must be > 0");
 	def = plait_default_world_def();
+	def.contact_pass_interval = -1;
+	cr_assert(plait_world_id_is_null(plait_create_world(&def, &error)));
+	ASSERT_MESSAGE(error, "contact_pass_interval must be in 0..1000, got -1");
+	def = plait_default_world_def();
 	def.space_scale = 0.0f;
 	cr_assert(plait_world_id_is_null(plait_create_world(&def, &error)));
 	ASSERT_MESSAGE(error, "space_scale");
@@ -37,6 +41,7 @@ Test(api, defaults_are_the_documented_ones)
 	cr_assert_eq(w.fps, 24.0f);
 	cr_assert_eq(w.substeps, 3);
 	cr_assert_eq(w.max_collision_iterations, 4);
+	cr_assert_eq(w.contact_pass_interval, 0);
 	cr_assert_eq(w.gravity.y, -9.81f);
 	cr_assert_eq(w.space_scale, 1.0f);
 	plait_cloth_def c = plait_default_cloth_def();
@@ -225,6 +230,70 @@ Test(api, schedule_is_readable_through_the_api)
 	cr_assert_str_eq(names[0], "stretch");
 	cr_assert_str_eq(names[1], "stretch");
 	cr_assert_str_eq(names[2], "collision");
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+}
+
+/* Names of substep s's passes, joined by spaces. */
+static void schedule_text(plait_world_id world, int s, char *text, size_t size)
+{
+	const char *names[64];
+	int count = plait_world_get_schedule(world, s, names, 64);
+	cr_assert(count > 0 && count <= 64);
+	text[0] = '\0';
+	for (int e = 0; e < count; ++e) {
+		strncat(text, names[e], size - strlen(text) - 2);
+		strncat(text, e + 1 < count ? " " : "", size - strlen(text) - 1);
+	}
+}
+
+/* Contact passes take collision slots among the stretch iterations: with the interval 1 and the
+ * default 20 stretch iterations a frame over 3 substeps (6, 7, 7), each substep has as many
+ * collision slots as stretch iterations, of which max_collision_iterations' share (1, 1, 2; the
+ * last always among them) stay collision iterations; at most 8 slots a substep. */
+Test(api, contact_passes_fill_collision_slots_between_stretch_iterations)
+{
+	plait_world_def wdef = plait_default_world_def();
+	wdef.contact_pass_interval = 1;
+	plait_world_id world = plait_create_world(&wdef, NULL);
+	test_grid grid = test_grid_make(2, 2, 1.0f, 1.0f);
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(&grid);
+	cloth.shear_resistance = 0.0f;
+	cloth.bend_resistance = 0.0f;
+	plait_object_id id = plait_create_cloth(world, &cloth, NULL);
+	plait_collider_def ground = plait_default_collider_def();
+	plait_create_collider(world, &ground, NULL);
+	char text[1024];
+	schedule_text(world, 0, text, sizeof text);
+	cr_expect_str_eq(
+	    text, "stretch contact stretch contact stretch contact stretch contact stretch contact stretch "
+	          "collision");
+	schedule_text(world, 2, text, sizeof text);
+	cr_expect_str_eq(
+	    text, "stretch contact stretch contact stretch contact stretch collision stretch contact stretch "
+	          "contact stretch collision");
+	/* A rigid cloth's 1,000 stretch iterations: 8 slots a substep, not 333. */
+	cloth.stretch_resistance = 10000.0f;
+	plait_destroy_object(id);
+	plait_create_cloth(world, &cloth, NULL);
+	const char *names[512];
+	int count = plait_world_get_schedule(world, 0, names, 512), slots = 0, collisions = 0;
+	for (int e = 0; e < count; ++e) {
+		slots += strcmp(names[e], "contact") == 0 || strcmp(names[e], "collision") == 0;
+		collisions += strcmp(names[e], "collision") == 0;
+	}
+	cr_expect_eq(slots, 8);
+	cr_expect_eq(collisions, 1);
+	cr_expect_str_eq(names[count - 1], "collision");
+	/* 0: the collision iterations alone. */
+	wdef = plait_world_get_def(world);
+	wdef.contact_pass_interval = 0;
+	cr_assert_eq(plait_world_set_def(world, &wdef, NULL), PLAIT_OK);
+	count = plait_world_get_schedule(world, 0, names, 512);
+	for (int e = 0; e < count; ++e) {
+		cr_expect_str_neq(names[e], "contact");
+	}
 	test_grid_free(&grid);
 	plait_destroy_world(world);
 }

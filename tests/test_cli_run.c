@@ -371,6 +371,28 @@ Test(cli_run, explain_json_has_the_exact_shape)
 	free(dir);
 }
 
+/* `contact_pass_interval` in a scene's world: explain says so and lists the contact passes. */
+Test(cli_run, explain_lists_contact_passes)
+{
+	char *dir = make_temp_dir();
+	char *scene =
+	    write_scene(dir, "{\"world\": {\"contact_pass_interval\": 2}, \"frames\": 2, \"objects\": [\n"
+	                     " {\"name\": \"sheet\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], "
+	                     "\"resolution\": [2, 2], \"center\": [0, 1, 0]}},\n"
+	                     " {\"name\": \"ground\", \"type\": \"collider\", \"shape\": \"plane\"}]}\n");
+	const char *argv[] = {"plait", "explain", scene};
+	cli_result r = run_cli(3, argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	cr_expect(strstr(r.out, "a contact pass or collision iteration at least every 2 stretch iterations") !=
+	              NULL,
+	          "%s", r.out);
+	cr_expect(strstr(r.out, "contact,") != NULL, "no contact pass listed:\n%s", r.out);
+	free_result(&r);
+	free(scene);
+	remove_tree(dir);
+	free(dir);
+}
+
 Test(cli_run, bad_arguments_exit_2_with_usage)
 {
 	static const char *const cases[][4] = {

@@ -110,8 +110,16 @@ typedef struct plait_world_def {
 	float fps;                    /* frames per second, > 0 (24) */
 	int substeps;                 /* substeps per frame, 1..1000 (3) */
 	int max_collision_iterations; /* collision iterations per frame, 0..1000 (4); never fewer than substeps */
-	plait_vec3 gravity;           /* m/s^2 (0, -9.81, 0); scaled by 1/space_scale */
-	float air_density;            /* kg/m^3, >= 0 (1.0) */
+	/* Contact passes (a "contact" in plait explain's schedule) between a substep's collision
+	 * iterations, so that stretch iterations do not pull cloth into what it rests on: each
+	 * enforces again the contacts the last collision iteration found (vertices on colliders,
+	 * cloth pairs that pushed), at a small part of an iteration's cost. A collision iteration or
+	 * a contact pass at least once every this many stretch iterations, at most 8 of them a
+	 * substep; 0: none, only the collision iterations (0). 1 is what a cloth resting on
+	 * colliders at the default substeps wants (docs/architecture.md, "Contact passes"). */
+	int contact_pass_interval;
+	plait_vec3 gravity; /* m/s^2 (0, -9.81, 0); scaled by 1/space_scale */
+	float air_density;  /* kg/m^3, >= 0 (1.0) */
 	plait_wind_def wind;
 	float space_scale; /* metres per scene unit, > 0 (1) */
 	float time_scale;  /* simulated seconds per real second of frame time, > 0 (1) */

@@ -194,7 +194,7 @@ bool plait_contacts_begin_substep(plait_sim *sim)
 static void record_collider_contact(plait_particles *p, int i, vec3 normal, vec3 surface_velocity,
                                     float bounce, float stickiness)
 {
-	p->flags[i] |= PLAIT_PARTICLE_CONTACT;
+	p->flags[i] |= PLAIT_PARTICLE_CONTACT | PLAIT_PARTICLE_TOUCHED;
 	p->contact_normal[i] = normal;
 	p->contact_velocity[i] = surface_velocity;
 	p->contact_bounce[i] = bounce;
@@ -971,6 +971,9 @@ static int collide_with_collider(plait_sim *sim, const plait_collider *c, int *i
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
+	if (indices != NULL && indices == sim->contact_particles) {
+		return contacts; /* a contact pass: particles only */
+	}
 	if (c->shape.type == PLAIT_SHAPE_SPHERE || c->shape.type == PLAIT_SHAPE_CAPSULE) {
 		contacts += push_triangles_out_of_round(&job);
 	}
@@ -1176,6 +1179,55 @@ void plait_collide(plait_sim *sim)
 		}
 	}
 	sim->contacts += contacts;
+	sim->contact_particle_count = -1; /* gathered again at the next contact pass */
+}
+
+/* The particles that touched a collider since the last gathering (PLAIT_PARTICLE_TOUCHED, which
+ * the substep's end leaves set), in index order; false only when out of memory. */
+static bool gather_contact_particles(plait_sim *sim)
+{
+	plait_particles *p = &sim->particles;
+	if (sim->contact_particle_capacity < p->count) {
+		plait_free(&sim->allocator, sim->contact_particles);
+		sim->contact_particles = plait_alloc(&sim->allocator, sizeof(int) * (size_t)p->count);
+		sim->contact_particle_capacity = sim->contact_particles != NULL ? p->count : 0;
+		if (sim->contact_particles == NULL) {
+			return false;
+		}
+	}
+	int count = 0;
+	for (int i = 0; i < p->count; ++i) {
+		if (p->flags[i] & PLAIT_PARTICLE_TOUCHED) {
+			p->flags[i] &= (uint8_t)~PLAIT_PARTICLE_TOUCHED;
+			sim->contact_particles[count++] = i;
+		}
+	}
+	sim->contact_particle_count = count;
+	return true;
+}
+
+void plait_collide_again(plait_sim *sim)
+{
+	if (sim->mesh_contacts_active) {
+		plait_mesh_contacts_project_again(sim);
+	}
+	if (sim->contact_particle_count < 0 && !gather_contact_particles(sim)) {
+		return; /* out of memory: the collision iterations still run */
+	}
+	int count = sim->contact_particle_count;
+	if (count == 0) {
+		return;
+	}
+	for (int k = 0; k < sim->collider_count; ++k) {
+		if (sim->colliders[k].collide) {
+			(void)collide_with_collider(sim, &sim->colliders[k], sim->contact_particles, count, NULL, NULL);
+		}
+	}
+	for (int k = sim->collider_count - 2; k >= 0; --k) {
+		if (sim->colliders[k].collide) {
+			(void)collide_with_collider(sim, &sim->colliders[k], sim->contact_particles, count, NULL, NULL);
+		}
+	}
 }
 
 /* Whether a cloth's triangles are pushed out of round colliders (push_triangles_out_of_round):
@@ -1317,6 +1369,7 @@ void plait_collider_pass_end(plait_sim *sim, plait_collider_pass *pass)
 	for (int j = 0; j < pass->count; ++j) {
 		sim->contacts += atomic_load_explicit(&pass->jobs[j].contacts, memory_order_relaxed);
 	}
+	sim->contact_particle_count = -1;
 }
 
 int plait_collide_listed_with_colliders(plait_sim *sim, int *indices, int *count, int *listed)

@@ -500,6 +500,14 @@ void plait_mesh_contacts_restitute(plait_sim *sim)
 	}
 }
 
+void plait_mesh_contacts_project_again(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc != NULL && mc->active && mc->pair_count > 0 && mc->tangle_count == 0) {
+		(void)plait_mesh_contacts_project_list(sim, mc, true);
+	}
+}
+
 int plait_mesh_contacts_project(plait_sim *sim)
 {
 	plait_mesh_contacts *mc = sim->mesh_contacts;
@@ -529,7 +537,7 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		}
 		mc->gathered = true;
 	}
-	int contacts = plait_mesh_contacts_project_list(sim, mc);
+	int contacts = plait_mesh_contacts_project_list(sim, mc, false);
 	if (mc->tangle_push_count > 0) {
 		contacts += plait_mesh_contacts_push_through(sim, mc);
 	}

@@ -42,6 +42,10 @@ void plait_mesh_contacts_positions_set(plait_sim *sim);
 /* One collision iteration over the candidates; returns the contacts resolved. */
 int plait_mesh_contacts_project(plait_sim *sim);
 
+/* A contact pass (contact.h): the listed pairs that pushed at the last collision iteration,
+ * projected again, in the iteration's order. */
+void plait_mesh_contacts_project_again(plait_sim *sim);
+
 /* The end-of-substep guarantee; before the velocities are taken from the positions. */
 void plait_mesh_contacts_failsafe(plait_sim *sim);
 

@@ -138,7 +138,8 @@ typedef struct contact_pair {
 	 * closing). */
 	uint8_t restitutes;
 	uint8_t pushed;
-	float distance; /* contact distance, scene units */
+	uint8_t pushed_last; /* pushed at the last collision iteration: contact passes project it */
+	float distance;      /* contact distance, scene units */
 	float friction;
 	float approach;
 	float side;     /* vertex-face: which side of the triangle's plane the vertex is on (+1, -1) */
@@ -690,8 +691,9 @@ void plait_mesh_contacts_free_pieces(plait_mesh_contacts *mc, const plait_alloca
  * *ccd_hits. Returns 1 when it moved the pair's vertices. */
 int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *ccd_hits);
 /* The list's pairs projected once, a list of PLAN_LEAST_PAIRS or more in its plan's order and on
- * the workers (mesh_contact_plan.c); returns the contacts. */
-int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc);
+ * the workers (mesh_contact_plan.c); returns the contacts. Each pair remembers whether it pushed
+ * (pushed_last); `again` (a contact pass) projects only those that did. */
+int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, bool again);
 /* Puts the list in the plan's order, unless it is already; false when out of memory (the list
  * then keeps its order and is projected one pair after another: another result than the plan's,
  * but still the same for any number of threads). */

@@ -309,17 +309,26 @@ bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc)
 typedef struct project_job {
 	plait_sim *sim;
 	plait_mesh_contacts *mc;
+	bool again; /* a contact pass: only the pairs that pushed at the last collision iteration */
 	_Atomic int contacts;
 	_Atomic int ccd_hits;
 } project_job;
 
-static int project_range(plait_sim *sim, plait_mesh_contacts *mc, int begin, int end, int *ccd_hits)
+static int project_range(plait_sim *sim, plait_mesh_contacts *mc, int begin, int end, bool again,
+                         int *ccd_hits)
 {
 	int contacts = 0;
 	for (int k = begin; k < end; ++k) {
-		if (mc->pairs[k].distance > 0.0f) {
-			contacts += plait_mesh_contacts_project_pair(sim, &mc->pairs[k], ccd_hits);
+		contact_pair *pair = &mc->pairs[k];
+		if (again) {
+			if (pair->pushed_last && pair->distance > 0.0f) {
+				contacts += plait_mesh_contacts_project_pair(sim, pair, ccd_hits);
+			}
+			continue;
 		}
+		int pushed = pair->distance > 0.0f ? plait_mesh_contacts_project_pair(sim, pair, ccd_hits) : 0;
+		pair->pushed_last = pushed > 0;
+		contacts += pushed;
 	}
 	return contacts;
 }
@@ -328,20 +337,20 @@ static void project_groups(void *context, int begin, int end)
 {
 	project_job *job = context;
 	int ccd_hits = 0;
-	int contacts =
-	    project_range(job->sim, job->mc, job->mc->group_start[begin], job->mc->group_start[end], &ccd_hits);
+	int contacts = project_range(job->sim, job->mc, job->mc->group_start[begin], job->mc->group_start[end],
+	                             job->again, &ccd_hits);
 	atomic_fetch_add_explicit(&job->contacts, contacts, memory_order_relaxed);
 	atomic_fetch_add_explicit(&job->ccd_hits, ccd_hits, memory_order_relaxed);
 }
 
-int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc)
+int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, bool again)
 {
 	bool planned = mc->pair_count >= PLAN_LEAST_PAIRS && plait_mesh_contacts_plan(sim, mc);
 	if (!planned) {
-		return project_range(sim, mc, 0, mc->pair_count, &sim->ccd_hits);
+		return project_range(sim, mc, 0, mc->pair_count, again, &sim->ccd_hits);
 	}
-	mc->plan_projections += 1;
-	project_job job = {sim, mc, 0, 0};
+	mc->plan_projections += !again;
+	project_job job = {sim, mc, again, 0, 0};
 	/* The stages, each after the one before: slabs, even borders, odd borders. Then the wide
 	 * pairs and those a mending added, on the calling thread. */
 	for (int k = 0; k < PLAN_STAGES; ++k) {
@@ -351,5 +360,5 @@ int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc)
 	sim->ccd_hits += atomic_load_explicit(&job.ccd_hits, memory_order_relaxed);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
 	return contacts +
-	       project_range(sim, mc, mc->group_start[PLAN_WIDE_GROUP], mc->pair_count, &sim->ccd_hits);
+	       project_range(sim, mc, mc->group_start[PLAN_WIDE_GROUP], mc->pair_count, again, &sim->ccd_hits);
 }

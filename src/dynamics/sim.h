@@ -21,6 +21,7 @@ enum {
 	PLAIT_PARTICLE_CONTACT = 4,   /* touched something in the current substep */
 	PLAIT_PARTICLE_SUPPORTED = 8, /* rested on a plane collider in the previous substep */
 	PLAIT_PARTICLE_ON_PLANE = 16, /* touched a plane collider in the current substep */
+	PLAIT_PARTICLE_TOUCHED = 32,  /* touched a collider since the last contact pass's gathering */
 };
 
 /* Per-object attributes the solver needs per particle (indexed by particles.material). */
@@ -305,13 +306,15 @@ typedef enum plait_kind {
 	PLAIT_KIND_BEND,
 	PLAIT_KIND_TETHER,
 	PLAIT_KIND_COLLISION,
+	PLAIT_KIND_CONTACT, /* a contact pass: the last collision iteration's contacts again (contact.h) */
 	PLAIT_KIND_COUNT
 } plait_kind;
 
 typedef struct plait_settings {
 	float fps, time_scale, space_scale;
 	int substeps, max_collision_iterations;
-	vec3 gravity; /* scene units / s^2 */
+	int contact_pass_interval; /* stretch iterations per collision iteration or contact pass; 0: none */
+	vec3 gravity;              /* scene units / s^2 */
 	float air_density;
 	vec3 wind_velocity; /* scene units / s */
 	float wind_noise;
@@ -383,6 +386,12 @@ typedef struct plait_sim {
 	int *pair_list;                /* particles taking part in particle-pair collisions */
 	vec3 *pair_lower, *pair_upper; /* their swept, thickened boxes */
 	int pair_list_capacity;
+
+	/* Contact passes (contact.h): whether the schedule has any, and the particles that touched
+	 * something at the last collision iteration, which they go over again. */
+	bool contact_passes;
+	int *contact_particles;
+	int contact_particle_count, contact_particle_capacity;
 
 	/* How the hot loops run: the kernel of the chosen instruction set and the workers. */
 	plait_simd simd;

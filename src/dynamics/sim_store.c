@@ -102,6 +102,7 @@ void plait_sim_destroy(plait_sim *sim)
 	plait_free(&sim->allocator, sim->chains);
 	plait_free(&sim->allocator, sim->pair_contacts);
 	plait_free(&sim->allocator, sim->pair_list);
+	plait_free(&sim->allocator, sim->contact_particles);
 	plait_free(&sim->allocator, sim->pair_lower);
 	plait_free(&sim->allocator, sim->pair_upper);
 	plait_free(&sim->allocator, sim->column_x);

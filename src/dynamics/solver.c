@@ -15,12 +15,60 @@
 #include "dynamics/particle_step.h"
 #include "dynamics/wave.h"
 
-const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear", "bend", "tether", "collision"};
+const char *const plait_kind_names[PLAIT_KIND_COUNT] = {"stretch", "shear",     "bend",
+                                                        "tether",  "collision", "contact"};
 
 /* Order of each kind within a position: stretch first, collisions last (paper §6, Fig. 10).
  * Tethers come after the deformation kinds so that, collisions aside, their limit holds at
- * the end of every substep. */
-static const int kind_order[PLAIT_KIND_COUNT] = {10, 20, 30, 50, 100};
+ * the end of every substep. (Contact passes take collision slots: below.) */
+static const int kind_order[PLAIT_KIND_COUNT] = {10, 20, 30, 50, 100, 100};
+
+/* The most collision iterations and contact passes together in a substep that contact passes
+ * ask for (a rigid cloth's derived 1,000 stretch iterations would otherwise ask for 500). */
+#define CONTACT_PASSES_PER_SUBSTEP 8
+
+/* Contact passes (contact.h) fill collision slots: the collisions run as often as the contact
+ * pass interval asks (one per `interval` stretch iterations, at most CONTACT_PASSES_PER_SUBSTEP
+ * a substep), and in each substep as many of those slots as max_collision_iterations gives it,
+ * spread evenly and the last among them, stay collision iterations; the others become contact
+ * passes. So a substep still ends with a collision iteration, and the iterations that would run
+ * without contact passes still run, each at about the same place. */
+static int collision_slots(const plait_sim *sim)
+{
+	int iterations = sim->settings.max_collision_iterations, interval = sim->settings.contact_pass_interval;
+	if (interval <= 0 || !sim->kind_active[PLAIT_KIND_STRETCH]) {
+		return iterations;
+	}
+	int wanted = (sim->kind_importance[PLAIT_KIND_STRETCH] + interval - 1) / interval;
+	int most = CONTACT_PASSES_PER_SUBSTEP * sim->settings.substeps;
+	wanted = wanted < most ? wanted : most;
+	return wanted > iterations ? wanted : iterations;
+}
+
+static void make_contact_passes(plait_sim *sim, int collision, int contact)
+{
+	plait_schedule *schedule = &sim->schedule;
+	int substeps = sim->settings.substeps;
+	for (int s = 0; s < substeps; ++s) {
+		int first = schedule->substep_start[s], last = schedule->substep_start[s + 1];
+		int slots = 0;
+		for (int e = first; e < last; ++e) {
+			slots += schedule->events[e] == collision;
+		}
+		int kept = plait_schedule_substep_iterations(sim->settings.max_collision_iterations, substeps, s);
+		for (int e = first, j = 0; e < last; ++e) {
+			if (schedule->events[e] != collision) {
+				continue;
+			}
+			/* Slot j stays a collision iteration where the kept ones' even spread steps. */
+			if ((long long)(j + 1) * kept / slots == (long long)j * kept / slots) {
+				schedule->events[e] = contact;
+				sim->contact_passes = true;
+			}
+			++j;
+		}
+	}
+}
 
 plait_result plait_sim_update_schedule(plait_sim *sim, plait_error *error)
 {
@@ -28,21 +76,27 @@ plait_result plait_sim_update_schedule(plait_sim *sim, plait_error *error)
 		return PLAIT_OK;
 	}
 	plait_kind_desc kinds[PLAIT_KIND_COUNT];
-	int count = 0;
+	int count = 0, collision = -1;
 	for (int k = 0; k < PLAIT_KIND_COUNT; ++k) {
-		if (!sim->kind_active[k]) {
+		if (!sim->kind_active[k] || k == PLAIT_KIND_CONTACT) {
 			continue;
 		}
-		int importance =
-		    k == PLAIT_KIND_COLLISION ? sim->settings.max_collision_iterations : sim->kind_importance[k];
+		int importance = k == PLAIT_KIND_COLLISION ? collision_slots(sim) : sim->kind_importance[k];
 		kinds[count] = (plait_kind_desc){plait_kind_names[k], kind_order[k], importance};
 		sim->schedule_kinds[count] = k;
+		collision = k == PLAIT_KIND_COLLISION ? count : collision;
 		++count;
 	}
 	plait_schedule_destroy(&sim->schedule, &sim->allocator);
 	plait_result result =
 	    plait_schedule_build(&sim->schedule, &sim->allocator, sim->settings.substeps, kinds, count, error);
+	sim->contact_passes = false;
+	sim->contact_particle_count = 0;
 	if (result == PLAIT_OK) {
+		if (collision >= 0) {
+			sim->schedule_kinds[count] = PLAIT_KIND_CONTACT;
+			make_contact_passes(sim, collision, count);
+		}
 		sim->schedule_dirty = false;
 	}
 	return result;
@@ -571,6 +625,13 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		leave_columns(sim);
 		double start = plait_seconds();
 		plait_collide(sim);
+		sim->collision_seconds += plait_seconds() - start;
+		break;
+	}
+	case PLAIT_KIND_CONTACT: {
+		leave_columns(sim);
+		double start = plait_seconds();
+		plait_collide_again(sim);
 		sim->collision_seconds += plait_seconds() - start;
 		break;
 	}

@@ -22,6 +22,7 @@ plait_world_def plait_default_world_def(void)
 	def.fps = 24.0f;
 	def.substeps = 3;
 	def.max_collision_iterations = 4;
+	def.contact_pass_interval = 0;
 	def.gravity = (plait_vec3){0.0f, -9.81f, 0.0f};
 	def.air_density = 1.0f;
 	def.wind.direction = (plait_vec3){1.0f, 0.0f, 0.0f};
@@ -60,6 +61,11 @@ static plait_result validate_world_def(const plait_world_def *def, bool check_ho
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
 		                       "max_collision_iterations must be in 0..%d, got %d", PLAIT_MAX_IMPORTANCE,
 		                       def->max_collision_iterations);
+	}
+	if (def->contact_pass_interval < 0 || def->contact_pass_interval > PLAIT_MAX_IMPORTANCE) {
+		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT,
+		                       "contact_pass_interval must be in 0..%d, got %d", PLAIT_MAX_IMPORTANCE,
+		                       def->contact_pass_interval);
 	}
 	if (!finite3(def->gravity)) {
 		return plait_error_set(error, PLAIT_ERROR_INVALID_ARGUMENT, "gravity must be finite");
@@ -118,6 +124,7 @@ static void apply_settings(plait_world *world)
 	s->space_scale = def->space_scale;
 	s->substeps = def->substeps;
 	s->max_collision_iterations = def->max_collision_iterations;
+	s->contact_pass_interval = def->contact_pass_interval;
 	s->gravity = (vec3){def->gravity.x * inverse_scale, def->gravity.y * inverse_scale,
 	                    def->gravity.z * inverse_scale};
 	s->air_density = def->air_density;

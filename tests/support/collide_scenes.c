@@ -499,7 +499,8 @@ bool collide_scene_create(collide_scene *scene, collide_scene_kind kind, int n, 
 
 collide_scene_options collide_scene_default_options(void)
 {
-	return (collide_scene_options){.self_flag = plait_default_cloth_def().self_collision_flag};
+	return (collide_scene_options){.self_flag = plait_default_cloth_def().self_collision_flag,
+	                               .contact_pass_interval = -1};
 }
 
 bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, int n,
@@ -515,6 +516,9 @@ bool collide_scene_create_with(collide_scene *scene, collide_scene_kind kind, in
 	}
 	def.fps = 60.0f;
 	def.air_density = 0.0f;
+	if (options->contact_pass_interval >= 0) {
+		def.contact_pass_interval = options->contact_pass_interval;
+	}
 	scene->fps = def.fps;
 	scene->world = plait_create_world(&def, error);
 	if (plait_world_id_is_null(scene->world)) {

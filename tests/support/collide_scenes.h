@@ -41,6 +41,8 @@ typedef struct collide_scene_options {
 	 * scene units, one of a family of nearby starts: a chaotic scene (folds, a pile) takes each
 	 * its own way, so a change to the solver can be judged over several outcomes, not one. */
 	int variant;
+	/* The world's contact_pass_interval (plait_world_def); -1: the def's as given */
+	int contact_pass_interval;
 	/* arm: the upper arm and forearm as closed triangle meshes of their capsules (912 triangles
 	 * each); drape and twist: the sphere as a closed mesh of 40 slices and stacks (3,120
 	 * triangles); not analytic shapes */

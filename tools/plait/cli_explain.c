@@ -93,6 +93,9 @@ static void plait_explain_text(const plait_scene *scene, plait_world_id world, F
 	fprintf(out, "scene %s\n", scene->file);
 	fprintf(out, "  %d frames at %g fps, %d substeps per frame, %d collision iterations per frame\n",
 	        scene->frames, w.fps, w.substeps, w.max_collision_iterations);
+	if (w.contact_pass_interval > 0)
+		fprintf(out, "  a contact pass or collision iteration at least every %d stretch iterations\n",
+		        w.contact_pass_interval);
 	fprintf(out, "  gravity [%g, %g, %g] m/s^2, air density %g kg/m^3\n", w.gravity.x, w.gravity.y,
 	        w.gravity.z, w.air_density);
 	if (w.wind.speed > 0.0f)

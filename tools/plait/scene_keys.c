@@ -88,6 +88,7 @@ static const plait_scene_key plait_world_keys[] = {
     PLAIT_FLOAT("fps", PLAIT_ABOVE(0), plait_world_def, fps),
     PLAIT_INT("substeps", PLAIT_BETWEEN(1, 1000), plait_world_def, substeps),
     PLAIT_INT("max_collision_iterations", PLAIT_BETWEEN(0, 1000), plait_world_def, max_collision_iterations),
+    PLAIT_INT("contact_pass_interval", PLAIT_BETWEEN(0, 1000), plait_world_def, contact_pass_interval),
     PLAIT_VEC3("gravity", plait_world_def, gravity),
     PLAIT_FLOAT("air_density", PLAIT_AT_LEAST(0), plait_world_def, air_density),
     PLAIT_SPECIAL("wind", false),
