@@ -209,20 +209,32 @@ Test(api, keyframed_collider_sweeps_particles_along)
 	plait_destroy_world(world);
 }
 
+/* A world of wdef with a 2 x 2 cloth of stretch only (resistance `stretch`) over the ground. */
+static plait_world_id schedule_world(const plait_world_def *wdef, float stretch, test_grid *grid,
+                                     plait_object_id *cloth_id)
+{
+	plait_world_id world = plait_create_world(wdef, NULL);
+	cr_assert(!plait_world_id_is_null(world));
+	*grid = test_grid_make(2, 2, 1.0f, 1.0f);
+	plait_cloth_def cloth = plait_default_cloth_def();
+	cloth.mesh = test_grid_mesh(grid);
+	cloth.stretch_resistance = stretch;
+	cloth.shear_resistance = 0.0f;
+	cloth.bend_resistance = 0.0f;
+	*cloth_id = plait_create_cloth(world, &cloth, NULL);
+	plait_collider_def ground = plait_default_collider_def();
+	ground.point.y = -1.0f;
+	plait_create_collider(world, &ground, NULL);
+	return world;
+}
+
 Test(api, schedule_is_readable_through_the_api)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.substeps = 10;
-	plait_world_id world = plait_create_world(&wdef, NULL);
-	test_grid grid = test_grid_make(2, 2, 1.0f, 1.0f);
-	plait_cloth_def cloth = plait_default_cloth_def();
-	cloth.mesh = test_grid_mesh(&grid);
-	cloth.shear_resistance = 0.0f;
-	cloth.bend_resistance = 0.0f;
-	plait_create_cloth(world, &cloth, NULL);
-	plait_collider_def ground = plait_default_collider_def();
-	ground.point.y = -1.0f;
-	plait_create_collider(world, &ground, NULL);
+	test_grid grid;
+	plait_object_id cloth;
+	plait_world_id world = schedule_world(&wdef, plait_default_cloth_def().stretch_resistance, &grid, &cloth);
 	cr_assert_eq(plait_world_get_substep_count(world), 10);
 	const char *names[16];
 	int count = plait_world_get_schedule(world, 0, names, 16);
@@ -255,15 +267,9 @@ Test(api, contact_passes_fill_collision_slots_between_stretch_iterations)
 {
 	plait_world_def wdef = plait_default_world_def();
 	wdef.contact_pass_interval = 1;
-	plait_world_id world = plait_create_world(&wdef, NULL);
-	test_grid grid = test_grid_make(2, 2, 1.0f, 1.0f);
-	plait_cloth_def cloth = plait_default_cloth_def();
-	cloth.mesh = test_grid_mesh(&grid);
-	cloth.shear_resistance = 0.0f;
-	cloth.bend_resistance = 0.0f;
-	plait_object_id id = plait_create_cloth(world, &cloth, NULL);
-	plait_collider_def ground = plait_default_collider_def();
-	plait_create_collider(world, &ground, NULL);
+	test_grid grid;
+	plait_object_id id;
+	plait_world_id world = schedule_world(&wdef, plait_default_cloth_def().stretch_resistance, &grid, &id);
 	char text[1024];
 	schedule_text(world, 0, text, sizeof text);
 	cr_expect_str_eq(
@@ -274,9 +280,9 @@ Test(api, contact_passes_fill_collision_slots_between_stretch_iterations)
 	    text, "stretch contact stretch contact stretch contact stretch collision stretch contact stretch "
 	          "contact stretch collision");
 	/* A rigid cloth's 1,000 stretch iterations: 8 slots a substep, not 333. */
-	cloth.stretch_resistance = 10000.0f;
-	plait_destroy_object(id);
-	plait_create_cloth(world, &cloth, NULL);
+	test_grid_free(&grid);
+	plait_destroy_world(world);
+	world = schedule_world(&wdef, 10000.0f, &grid, &id);
 	const char *names[512];
 	int count = plait_world_get_schedule(world, 0, names, 512), slots = 0, collisions = 0;
 	for (int e = 0; e < count; ++e) {

@@ -621,17 +621,15 @@ static void run_event(plait_sim *sim, plait_kind kind, float inverse_h_squared, 
 		plait_solve_tethers(&sim->tether, &sim->particles, sim->simd, &sim->parallel);
 		sim->constraint_solves += sim->tether.count;
 		break;
-	case PLAIT_KIND_COLLISION: {
-		leave_columns(sim);
-		double start = plait_seconds();
-		plait_collide(sim);
-		sim->collision_seconds += plait_seconds() - start;
-		break;
-	}
+	case PLAIT_KIND_COLLISION:
 	case PLAIT_KIND_CONTACT: {
 		leave_columns(sim);
 		double start = plait_seconds();
-		plait_collide_again(sim);
+		if (kind == PLAIT_KIND_COLLISION) {
+			plait_collide(sim);
+		} else {
+			plait_collide_again(sim); /* a contact pass */
+		}
 		sim->collision_seconds += plait_seconds() - start;
 		break;
 	}
