@@ -56,6 +56,11 @@ typedef struct plait_collider_job {
 	int *listed;
 	int *grown_indices, *grown_count;
 	_Atomic int contacts;
+	/* Friction also where a particle pushed earlier in the substep rests on the collider without
+	 * pressing in (contact.c, rub_resting): a collision iteration's first pass over the colliders
+	 * only, so that the pass back over them (an elbow's crease) and the failsafe move particles
+	 * with pushes alone. */
+	bool rests;
 } plait_collider_job;
 
 #define PLAIT_PASS_COLLIDERS 8

@@ -112,6 +112,12 @@ typedef struct plait_particles {
 	vec3 *contact_normal;      /* world normal of the last contact in this substep */
 	vec3 *contact_velocity;    /* velocity of the touched surface */
 	float *contact_bounce, *contact_stickiness;
+	/* Collider pushes along their normals and the tangential motion their friction took off, each
+	 * summed over the substep's collision iterations and contact passes (scene units; read only
+	 * with PLAIT_PARTICLE_CONTACT set, which the substep's end clears). Friction acts on the whole
+	 * substep's motion and may take off up to friction times all the pushes less what it took
+	 * before: Coulomb's law over the substep, however many passes share it (contact.c). */
+	float *contact_push, *contact_rub;
 	float *drag_matrix;       /* 6 per particle: symmetric implicit air drag (kg/s) */
 	vec3 *air_force;          /* explicit air force toward the wind (N in scene units) */
 	vec3 *lift_force;         /* lift (N in scene units), limited when integrated */

@@ -53,6 +53,8 @@ static void free_particles(plait_sim *sim)
 	                  p->contact_velocity,
 	                  p->contact_bounce,
 	                  p->contact_stickiness,
+	                  p->contact_push,
+	                  p->contact_rub,
 	                  p->drag_matrix,
 	                  p->air_force,
 	                  p->lift_force,
@@ -141,6 +143,8 @@ bool plait_sim_reserve_particles(plait_sim *sim, int count)
 	          grow_array(a, (void **)&p->contact_velocity, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->contact_bounce, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->contact_stickiness, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->contact_push, sizeof(float), n, capacity) &&
+	          grow_array(a, (void **)&p->contact_rub, sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->drag_matrix, 6 * sizeof(float), n, capacity) &&
 	          grow_array(a, (void **)&p->air_force, sizeof(vec3), n, capacity) &&
 	          grow_array(a, (void **)&p->lift_force, sizeof(vec3), n, capacity) &&
