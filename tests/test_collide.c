@@ -2413,3 +2413,16 @@ Test(collide, a_contact_moves_no_vertex_farther_than_its_gap)
 	cr_expect_float_eq(triangle_up - moved[0].y, 0.006f, 1e-6f, "the pair opened by %g m",
 	                   (double)(triangle_up - moved[0].y));
 }
+
+/* Where two colliders meet, the pass back over them can push a particle out of one into the
+ * other (contact.c, resolve_creases). The arm with contact passes (K = 1): cloth slips on the
+ * turning capsules between collision iterations and reaches the elbow's crease; without
+ * resolve_creases a vertex stayed inside the forearm from frame 101 on, with triangles dipping
+ * into it. */
+Test(collide, cloth_in_the_crease_of_a_bending_arm_ends_outside_both_capsules, .timeout = 300)
+{
+	collide_scene_options options = collide_scene_default_options();
+	options.contact_pass_interval = 1;
+	scene_totals t = run_scene_with(SCENE_ARM, 0, 130, &options, NULL);
+	expect_clean(&t, "arm with contact passes");
+}
