@@ -387,6 +387,19 @@ Test(cli_run, explain_lists_contact_passes)
 	              NULL,
 	          "%s", r.out);
 	cr_expect(strstr(r.out, "contact,") != NULL, "no contact pass listed:\n%s", r.out);
+	cr_expect(strstr(r.out, "note: up to") == NULL, "a note with contact passes on:\n%s", r.out);
+	free_result(&r);
+	free(scene);
+	/* Without them, at the defaults (7 stretch passes to a collision pass), explain says so. */
+	scene = write_scene(dir, "{\"frames\": 2, \"objects\": [\n"
+	                         " {\"name\": \"sheet\", \"type\": \"cloth\", \"grid\": {\"size\": [1, 1], "
+	                         "\"resolution\": [2, 2], \"center\": [0, 1, 0]}},\n"
+	                         " {\"name\": \"ground\", \"type\": \"collider\", \"shape\": \"plane\"}]}\n");
+	const char *plain_argv[] = {"plait", "explain", scene};
+	r = run_cli(3, plain_argv);
+	cr_assert_eq(r.code, 0, "stderr: %s", r.err);
+	cr_expect(strstr(r.out, "note: up to 7 stretch passes per collision pass") != NULL, "%s", r.out);
+	cr_expect(strstr(r.out, "contact_pass_interval") != NULL, "%s", r.out);
 	free_result(&r);
 	free(scene);
 	remove_tree(dir);

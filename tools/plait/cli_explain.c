@@ -87,6 +87,39 @@ static bool plait_same_sequence(const char **a, int na, const char **b, int nb)
 	return true;
 }
 
+/* Seed 000 §4.1: cloth resting on a collider stretches where it rests when stretch passes far
+ * outnumber collision passes in a substep. Said when a scene has colliders, no contact passes,
+ * and a substep with three stretch passes or more per collision pass. */
+static void plait_explain_stretch_note(const plait_scene *scene, plait_world_id world,
+                                       const plait_world_def *w, int substep_count, FILE *out)
+{
+	bool colliders = false;
+	for (int i = 0; i < scene->object_count; ++i)
+		colliders = colliders || scene->objects[i].type == PLAIT_OBJECT_COLLIDER;
+	if (!colliders || w->contact_pass_interval > 0)
+		return;
+	int most = 0;
+	for (int s = 0; s < substep_count; ++s) {
+		const char **names;
+		int count = plait_explain_sequence(world, s, &names), stretch = 0, collision = 0;
+		for (int e = 0; e < count; ++e) {
+			stretch += strcmp(names[e], "stretch") == 0;
+			collision += strcmp(names[e], "collision") == 0;
+		}
+		free(names);
+		if (collision > 0 && stretch / collision > most)
+			most = stretch / collision;
+	}
+	if (most >= 3)
+		fprintf(
+		    out,
+		    "note: up to %d stretch passes per collision pass in a substep: cloth resting on a collider\n"
+		    "      stretches where it rests (the stretch passes pull it in, the collision pass pushes it\n"
+		    "      out). \"contact_pass_interval\": 1 in the world adds cheap contact passes between them\n"
+		    "      (docs/architecture.md, \"Contact passes\"); more substeps also help.\n",
+		    most);
+}
+
 static void plait_explain_text(const plait_scene *scene, plait_world_id world, FILE *out)
 {
 	plait_world_def w = plait_world_get_def(world);
@@ -146,6 +179,7 @@ static void plait_explain_text(const plait_scene *scene, plait_world_id world, F
 		free(names);
 		s = last + 1;
 	}
+	plait_explain_stretch_note(scene, world, &w, substep_count, out);
 }
 
 int plait_cli_explain(int argc, char **argv, FILE *out, FILE *err)
