@@ -73,6 +73,8 @@ Test(scene_errors, out_of_range_values_of_several_keys)
 	} cases[] = {
 	    {"{\"world\": {\"substeps\": 0}, \"objects\": []}",
 	     "scene.json: world.substeps: expected an integer from 1 to 1000, got 0"},
+	    {"{\"world\": {\"contact_pass_interval\": -3}, \"objects\": []}",
+	     "scene.json: world.contact_pass_interval: expected an integer from 0 to 1000, got -3"},
 	    {"{\"world\": {\"air_density\": -1.5}, \"objects\": []}",
 	     "scene.json: world.air_density: expected a number >= 0, got -1.5"},
 	    {"{\"world\": {\"wind\": {\"noise\": 11}}, \"objects\": []}",

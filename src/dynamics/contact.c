@@ -676,7 +676,7 @@ static int collide_particle(collider_job *job, int i, sphere_batch *batch, int *
 	 * each pass, with the constraint iterations pushing back between passes, spent friction's
 	 * limit on the same few micrometres again and again, and a sheet on a slope just under its
 	 * friction angle crept down it. */
-	bool again = job->indices != NULL && job->indices == sim->contact_particles;
+	bool again = job->again;
 	float friction = again ? 0.0f : plait_combined_friction(mat->friction, c->friction);
 	if (batch != NULL) {
 		int lane = (*batch_count)++;
@@ -1031,26 +1031,35 @@ static void prepare_collider_job(plait_sim *sim, const plait_collider *c, const 
 	}
 	*job =
 	    (collider_job){sim,      c,       bounded, world_lower, world_upper, ball_centre, ball_radius, still,
-	                   identity, indices, NULL,    NULL,        NULL,        0,           false};
+	                   identity, indices, NULL,    NULL,        NULL,        0,           false,       false};
 }
 
 /* Particles indices[0, count) (all particles when indices is NULL) against collider c. With
  * listed (plait_collide_listed_with_colliders), the particles a triangle push moves are added to
  * indices, grown_count counting them all. */
+/* Which pass over the colliders a collider job belongs to. */
+typedef enum collider_pass_kind {
+	PASS_FIRST,  /* a collision iteration's pass over the colliders (friction also where resting) */
+	PASS_BACK,   /* its pass back over them (an elbow's crease) */
+	PASS_AGAIN,  /* a contact pass */
+	PASS_LISTED, /* the failsafe's, over listed particles */
+} collider_pass_kind;
+
 static int collide_with_collider(plait_sim *sim, const plait_collider *c, int *indices, int count,
-                                 int *listed, int *grown_count, bool rests)
+                                 int *listed, int *grown_count, collider_pass_kind kind)
 {
 	plait_particles *p = &sim->particles;
 	collider_job job;
 	prepare_collider_job(sim, c, indices, &job);
-	job.rests = rests;
+	job.rests = kind == PASS_FIRST;
+	job.again = kind == PASS_AGAIN;
 	job.listed = listed;
 	job.grown_indices = indices;
 	job.grown_count = grown_count;
 	plait_parallel_for(&sim->parallel, collide_collider_range, &job, 0, indices != NULL ? count : p->count,
 	                   COLLIDER_GRAIN);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
-	if (indices != NULL && indices == sim->contact_particles) {
+	if (job.again) {
 		return contacts; /* a contact pass: particles only */
 	}
 	if (c->shape.type == PLAIT_SHAPE_SPHERE || c->shape.type == PLAIT_SHAPE_CAPSULE) {
@@ -1323,14 +1332,14 @@ void plait_collide(plait_sim *sim)
 	}
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
-			contacts += collide_with_collider(sim, &sim->colliders[k], NULL, 0, NULL, NULL, true);
+			contacts += collide_with_collider(sim, &sim->colliders[k], NULL, 0, NULL, NULL, PASS_FIRST);
 		}
 	}
 	/* Where colliders meet (an elbow), pushing a particle out of one can push it into another:
 	 * back over them in reverse order, so that a particle in the crease settles outside both. */
 	for (int k = sim->collider_count - 2; k >= 0; --k) {
 		if (sim->colliders[k].collide) {
-			(void)collide_with_collider(sim, &sim->colliders[k], NULL, 0, NULL, NULL, false);
+			(void)collide_with_collider(sim, &sim->colliders[k], NULL, 0, NULL, NULL, PASS_BACK);
 		}
 	}
 	resolve_creases(sim);
@@ -1377,13 +1386,13 @@ void plait_collide_again(plait_sim *sim)
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
 			(void)collide_with_collider(sim, &sim->colliders[k], sim->contact_particles, count, NULL, NULL,
-			                            false);
+			                            PASS_AGAIN);
 		}
 	}
 	for (int k = sim->collider_count - 2; k >= 0; --k) {
 		if (sim->colliders[k].collide) {
 			(void)collide_with_collider(sim, &sim->colliders[k], sim->contact_particles, count, NULL, NULL,
-			                            false);
+			                            PASS_AGAIN);
 		}
 	}
 }
@@ -1537,7 +1546,8 @@ int plait_collide_listed_with_colliders(plait_sim *sim, int *indices, int *count
 	int contacts = 0;
 	for (int k = 0; k < sim->collider_count; ++k) {
 		if (sim->colliders[k].collide) {
-			contacts += collide_with_collider(sim, &sim->colliders[k], indices, *count, listed, count, false);
+			contacts +=
+			    collide_with_collider(sim, &sim->colliders[k], indices, *count, listed, count, PASS_LISTED);
 		}
 	}
 	return contacts;

@@ -61,6 +61,9 @@ typedef struct plait_collider_job {
 	 * only, so that the pass back over them (an elbow's crease) and the failsafe move particles
 	 * with pushes alone. */
 	bool rests;
+	/* A contact pass's (plait_collide_again): particles pushed out, no friction, no triangle
+	 * pushes. */
+	bool again;
 } plait_collider_job;
 
 #define PLAIT_PASS_COLLIDERS 8
