@@ -41,7 +41,7 @@ Test(api, defaults_are_the_documented_ones)
 	cr_assert_eq(w.fps, 24.0f);
 	cr_assert_eq(w.substeps, 3);
 	cr_assert_eq(w.max_collision_iterations, 4);
-	cr_assert_eq(w.contact_pass_interval, 0);
+	cr_assert_eq(w.contact_pass_interval, 1);
 	cr_assert_eq(w.gravity.y, -9.81f);
 	cr_assert_eq(w.space_scale, 1.0f);
 	plait_cloth_def c = plait_default_cloth_def();
@@ -238,10 +238,11 @@ Test(api, schedule_is_readable_through_the_api)
 	cr_assert_eq(plait_world_get_substep_count(world), 10);
 	const char *names[16];
 	int count = plait_world_get_schedule(world, 0, names, 16);
-	cr_assert_eq(count, 3);
+	cr_assert_eq(count, 4);
 	cr_assert_str_eq(names[0], "stretch");
-	cr_assert_str_eq(names[1], "stretch");
-	cr_assert_str_eq(names[2], "collision");
+	cr_assert_str_eq(names[1], "contact");
+	cr_assert_str_eq(names[2], "stretch");
+	cr_assert_str_eq(names[3], "collision");
 	test_grid_free(&grid);
 	plait_destroy_world(world);
 }

@@ -389,9 +389,9 @@ static cli_result explain_sheet_on_ground(const char *dir, const char *world)
 	return r;
 }
 
-/* `contact_pass_interval` in a scene's world: explain says so and lists the contact passes;
- * without them, at the defaults (7 stretch passes to a collision pass), it notes what that does
- * to cloth resting on a collider. */
+/* `contact_pass_interval` in a scene's world (1 by default): explain says so and lists the
+ * contact passes; with them off, at the default substeps (7 stretch passes to a collision pass),
+ * it notes what that does to cloth resting on a collider. */
 Test(cli_run, explain_lists_contact_passes)
 {
 	char *dir = make_temp_dir();
@@ -403,6 +403,11 @@ Test(cli_run, explain_lists_contact_passes)
 	cr_expect(strstr(r.out, "note: up to") == NULL, "a note with contact passes on:\n%s", r.out);
 	free_result(&r);
 	r = explain_sheet_on_ground(dir, "{}");
+	cr_expect(strstr(r.out, "at least every 1 stretch iterations") != NULL, "%s", r.out);
+	cr_expect(strstr(r.out, "note: up to") == NULL, "a note at the defaults:\n%s", r.out);
+	free_result(&r);
+	r = explain_sheet_on_ground(dir, "{\"contact_pass_interval\": 0}");
+	cr_expect(strstr(r.out, "contact,") == NULL, "a contact pass listed with them off:\n%s", r.out);
 	cr_expect(strstr(r.out, "note: up to 7 stretch passes per collision pass") != NULL, "%s", r.out);
 	cr_expect(strstr(r.out, "contact_pass_interval") != NULL, "%s", r.out);
 	free_result(&r);

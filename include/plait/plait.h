@@ -115,8 +115,9 @@ typedef struct plait_world_def {
 	 * enforces again the contacts the last collision iteration found (vertices on colliders,
 	 * cloth pairs that pushed), at a small part of an iteration's cost. A collision iteration or
 	 * a contact pass at least once every this many stretch iterations, at most 8 of them a
-	 * substep; 0: none, only the collision iterations (0). 1 is what a cloth resting on
-	 * colliders at the default substeps wants (docs/architecture.md, "Contact passes"). */
+	 * substep; 0: none, only the collision iterations, as before contact passes existed (1).
+	 * Without them cloth resting on a collider at the default substeps ends stretched where it
+	 * rests (docs/architecture.md, "Contact passes"). */
 	int contact_pass_interval;
 	plait_vec3 gravity; /* m/s^2 (0, -9.81, 0); scaled by 1/space_scale */
 	float air_density;  /* kg/m^3, >= 0 (1.0) */

@@ -1343,6 +1343,9 @@ void plait_collide(plait_sim *sim)
 		}
 	}
 	resolve_creases(sim);
+	if (sim->mesh_contacts_active) {
+		contacts += plait_mesh_contacts_project_on_colliders(sim);
+	}
 	sim->contacts += contacts;
 	sim->contact_particle_count = -1; /* gathered again at the next contact pass */
 }

@@ -157,15 +157,31 @@ void plait_mesh_contacts_positions_set(plait_sim *sim)
  * it does not give way), and how much the push is shortened so that no vertex moves farther than
  * the pair's gap closes; returns the factor that turns the push into the step each vertex moves
  * by w g (0 when none gives way). */
-static float push_shares(const plait_particles *p, const contact_pair *pair, const float *g, vec3 n, float *w)
+static float push_shares(const plait_particles *p, const contact_pair *pair, const float *g, vec3 n,
+                         pair_projection how, float *w)
 {
 	int count = pair_size[pair->type];
 	int first_count = pair->type == PAIR_EDGE_EDGE ? 2 : 1;
+	/* After the colliders' pass, which had the last word on the pair's vertices that touched a
+	 * collider, those stay, and the others move only away from the collider they touched:
+	 * pushing the inner of two layers on an arm toward it would put its triangles into it. */
+	vec3 collider_normal = {0.0f, 0.0f, 0.0f};
+	if (how == PROJECT_AFTER_COLLIDERS) {
+		for (int k = 0; k < count; ++k) {
+			if (p->flags[pair->v[k]] & PLAIT_PARTICLE_CONTACT) {
+				collider_normal = v3_add(collider_normal, p->contact_normal[pair->v[k]]);
+			}
+		}
+	}
 	bool any_free = false;
 	for (int k = 0; k < count; ++k) {
 		int i = pair->v[k];
-		float scale = pair->scale[k < first_count ? 0 : 1];
-		w[k] = p->point[i].w * scale;
+		w[k] = pair->gives_way[k < first_count ? 0 : 1] ? p->point[i].w : 0.0f;
+		if (how == PROJECT_AFTER_COLLIDERS &&
+		    ((p->flags[i] & PLAIT_PARTICLE_CONTACT) || !(g[k] * v3_dot(n, collider_normal) > 0.0f))) {
+			w[k] = 0.0f;
+			continue;
+		}
 		/* A vertex resting on a collider (a plane in the last substep, any collider in this one)
 		 * does not give way toward it: the collider would only push it back into whatever
 		 * pressed on it, and the two would cross. This lets layers stack on the ground and
@@ -209,33 +225,75 @@ static float normal_speed(const plait_particles *p, const contact_pair *pair, co
 	return v3_dot(relative, n);
 }
 
+/* The pair's sums (push_sum, rub_sum) made the substep's: zeroed at its first projection in a
+ * substep. Every collision iteration projects every listed pair, so a pair's mark is never more
+ * than a substep old, and its 8 bits cannot wrap round to a stale substep's. */
+static void sums_of_this_substep(const plait_sim *sim, contact_pair *pair)
+{
+	const plait_mesh_contacts *mc = sim->mesh_contacts;
+	uint8_t substep = mc != NULL ? (uint8_t)mc->substep_serial : 0;
+	if (pair->sums_substep != substep) {
+		pair->sums_substep = substep;
+		pair->push_sum = 0.0f;
+		pair->rub_sum = 0.0f;
+	}
+}
+
+/* The pair's relative motion over the substep, less its part along n (the g-weighted sum of its
+ * vertices' motions since the substep's start, as its separation weighs them). */
+static vec3 tangential_motion(const plait_particles *p, const contact_pair *pair, const float *g, vec3 n)
+{
+	vec3 relative = {0.0f, 0.0f, 0.0f};
+	for (int k = 0; k < pair_size[pair->type]; ++k) {
+		int i = pair->v[k];
+		relative = v3_mul_add(relative, g[k], v3_sub(p->point[i].x, p->x_prev[i]));
+	}
+	return v3_mul_add(relative, -v3_dot(relative, n), n);
+}
+
+/* Coulomb's law over the substep: friction takes off the pair's relative tangential motion of
+ * the substep, at most its value times all the pushes of the substep (push_sum, this one's
+ * included) less what it took before. With one push a substep that is the push's own share;
+ * with several (collision iterations, contact passes) each took its limit from its own push
+ * before, and a push of a few micrometres after stretch iterations could not hold what the
+ * substep's motion had carried: cloth resting on cloth crept down a slope, 37 mm in 2 s at 20
+ * degrees with friction 0.5. Returns the motion to take off (0 when none). */
+static vec3 rub(contact_pair *pair, vec3 tangential)
+{
+	float length = v3_length(tangential);
+	float limit = pair->friction * pair->push_sum - pair->rub_sum;
+	if (!(length > 0.0f) || !(limit > 0.0f)) {
+		return v3(0.0f, 0.0f, 0.0f);
+	}
+	float taken = plait_minf(length, limit);
+	pair->rub_sum += taken;
+	return v3_scale(tangential, taken / length);
+}
+
 /* Moves the pair's vertices so that C = (separation along n) - distance becomes 0: the vertices
  * move along n by their inverse mass times their weight g (the constraint's gradient), and
- * friction removes relative tangential motion of the substep within friction times the push.
- * A pair whose surfaces bounce or stick notes its first push of the substep, with its approach
- * (v still holds the velocities of the substep's start). */
-bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c)
+ * friction (rub) takes off relative tangential motion of the substep. Unlike a collider's contact
+ * pass, a pair's rubs in contact passes too: without it a coarse sheet balanced on a mesh
+ * spike's tip (friction 0.1) slid off it, and cloth slid down cloth at 35 degrees with friction
+ * 0.5 as with 0.4 (performance.md, session 33). A pair whose surfaces bounce or stick notes its
+ * first push of the substep, with its approach (v still holds the velocities of the substep's
+ * start). */
+bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c,
+                                 pair_projection how)
 {
 	plait_particles *p = &sim->particles;
 	int count = pair_size[pair->type];
 	float w[4];
-	float shortened = push_shares(p, pair, g, n, w);
+	float shortened = push_shares(p, pair, g, n, how, w);
 	if (shortened == 0.0f) {
 		return false;
 	}
-	vec3 relative = {0.0f, 0.0f, 0.0f};
-	for (int k = 0; k < count; ++k) {
-		int i = pair->v[k];
-		relative = v3_mul_add(relative, g[k], v3_sub(p->point[i].x, p->x_prev[i]));
-	}
+	sums_of_this_substep(sim, pair);
 	float depth = -c;
+	pair->push_sum += depth;
 	vec3 move = v3_scale(n, depth);
-	vec3 tangential = v3_mul_add(relative, -v3_dot(relative, n), n);
-	float tangential_length = v3_length(tangential);
-	if (tangential_length > 0.0f && pair->friction > 0.0f) {
-		float limit = pair->friction * depth;
-		float removed = tangential_length < limit ? 1.0f : limit / tangential_length;
-		move = v3_mul_add(move, -removed, tangential);
+	if (pair->friction > 0.0f) {
+		move = v3_sub(move, rub(pair, tangential_motion(p, pair, g, n)));
 	}
 	vec3 step = v3_scale(move, shortened);
 	/* Only vertices that give way are written: one that never moves (inverse mass 0) may be
@@ -251,6 +309,40 @@ bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float
 		pair->approach = normal_speed(p, pair, g, n);
 	}
 	return true;
+}
+
+/* Within this share of its contact distance past it, a pair pushed earlier in the substep still
+ * rests on what it pressed on, and its friction still acts (contact.c's RESTING_SLACK for
+ * colliders): the stretch iterations after a push lift resting cloth a little. */
+#define RESTING_SLACK 0.05f
+
+/* A pair at separation `separation` along n, not pressing: friction still takes off the
+ * substep's tangential motion, within what the substep's pushes allow, if it was pushed in the
+ * substep and rests within RESTING_SLACK; no push. */
+static void rub_resting(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float separation,
+                        pair_projection how)
+{
+	if (how == PROJECT_AGAIN || !(pair->friction > 0.0f) ||
+	    !(separation < pair->distance * (1.0f + RESTING_SLACK))) {
+		return;
+	}
+	sums_of_this_substep(sim, pair);
+	if (!(pair->push_sum > 0.0f)) {
+		return;
+	}
+	plait_particles *p = &sim->particles;
+	float w[4];
+	float shortened = push_shares(p, pair, g, n, how, w);
+	if (shortened == 0.0f) {
+		return;
+	}
+	vec3 step = v3_scale(rub(pair, tangential_motion(p, pair, g, n)), -shortened);
+	for (int k = 0; k < pair_size[pair->type]; ++k) {
+		if (w[k] != 0.0f) {
+			int i = pair->v[k];
+			p->point[i].x = v3_mul_add(p->point[i].x, w[k] * g[k], step);
+		}
+	}
 }
 
 /* For an edge-edge, vertex-edge or vertex-vertex pair at points x: the vector from the second
@@ -278,7 +370,7 @@ static vec3 closest_between(int type, const vec3 *x, float *g)
 	return v3_sub(x[0], x[1]);
 }
 
-int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *ccd_hits)
+int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, pair_projection how, int *ccd_hits)
 {
 	plait_particles *p = &sim->particles;
 	int type = pair->type, n = pair_size[type];
@@ -287,6 +379,7 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 	    plait_mesh_contacts_pair_tangled(mc, type, pair->v, TANGLED_NOW)) {
 		return 0; /* where surfaces begin through each other, their start side is no truth */
 	}
+	sums_of_this_substep(sim, pair);
 	vec3 x[4];
 	gather_current(p->point, pair->v, n, x);
 	float g[4];
@@ -305,8 +398,16 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 		vec3 r = v3_sub(x[0], q);
 		float along = v3_dot(r, face) * pair->side;
 		float reach = v3_length(r);
+		g[0] = 1.0f;
+		g[1] = -weights[0];
+		g[2] = -weights[1];
+		g[3] = -weights[2];
 		if (region != 0 && reach >= pair->distance && along >= 0.0f) {
-			return 0; /* beside the triangle, out of reach, on its side */
+			/* Beside the triangle, out of reach, on its side. */
+			if (reach > 1e-9f) {
+				rub_resting(sim, pair, g, v3_scale(r, 1.0f / reach), reach, how);
+			}
+			return 0;
 		}
 		bool crossed = false;
 		if (along < 0.0f) {
@@ -328,17 +429,13 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 			normal = reach > 1e-9f ? v3_scale(r, 1.0f / reach) : v3_scale(face, pair->side);
 			separation = reach;
 		}
-		if (separation >= pair->distance) {
-			return 0;
-		}
-		g[0] = 1.0f;
-		g[1] = -weights[0];
-		g[2] = -weights[1];
-		g[3] = -weights[2];
 	} else {
 		vec3 r = closest_between(type, x, g);
 		float length = v3_length(r);
 		if (length >= pair->distance && v3_dot(r, pair->direction) >= 0.0f) {
+			if (length > 1e-9f) {
+				rub_resting(sim, pair, g, v3_scale(r, 1.0f / length), length, how);
+			}
 			return 0;
 		}
 		bool crossed = false;
@@ -356,11 +453,12 @@ int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *cc
 			separation = length;
 			pair->direction = normal;
 		}
-		if (separation >= pair->distance) {
-			return 0;
-		}
 	}
-	return plait_mesh_contacts_respond(sim, pair, g, normal, separation - pair->distance);
+	if (separation >= pair->distance) {
+		rub_resting(sim, pair, g, normal, separation, how);
+		return 0;
+	}
+	return plait_mesh_contacts_respond(sim, pair, g, normal, separation - pair->distance, how);
 }
 
 /* ---- Bounce and stickiness ------------------------------------------------------------------ */
@@ -468,7 +566,7 @@ void plait_mesh_contacts_restitute(plait_sim *sim)
 			change = -stickiness * speed;
 		}
 		float w[4];
-		float shortened = change != 0.0f ? push_shares(p, pair, g, normal, w) : 0.0f;
+		float shortened = change != 0.0f ? push_shares(p, pair, g, normal, PROJECT_FULL, w) : 0.0f;
 		if (shortened == 0.0f) {
 			continue;
 		}
@@ -498,6 +596,60 @@ void plait_mesh_contacts_restitute(plait_sim *sim)
 			}
 		}
 	}
+}
+
+/* After a collision iteration's pass over the colliders, which has the last word, the pairs with
+ * a vertex on a collider are projected once more. The colliders pushed the lower of two resting
+ * layers up into the upper one after the pairs had pushed them apart, and their friction held
+ * the lower one back where the substep's motion had carried both (down a slope), while the pairs
+ * had found the two moving together and taken nothing off. Left to the next substep, the upper
+ * layer bounced on the lower in a cycle of two substeps, pressing lightly in every other one,
+ * and slid in those: a sheet on a sheet on a 20 degree slope, friction 0.5, crept 37 mm in 2 s.
+ * Vertices on a collider stay, the others move only away from it (push_shares), and those moved
+ * go through the colliders again (plait_collide_listed_with_colliders, in the failsafe's
+ * scratch, which is empty between its runs): on the arm, a vertex pushed away from one capsule
+ * ended in the other one. On the calling thread, in the list's order. */
+int plait_mesh_contacts_project_on_colliders(plait_sim *sim)
+{
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	if (mc == NULL || !mc->active || mc->tangle_count > 0) {
+		return 0;
+	}
+	const plait_particles *p = &sim->particles;
+	int contacts = 0;
+	for (int k = 0; k < mc->pair_count; ++k) {
+		contact_pair *pair = &mc->pairs[k];
+		if (!(pair->distance > 0.0f)) {
+			continue;
+		}
+		int n = pair_size[pair->type];
+		bool on_collider = false;
+		for (int q = 0; q < n; ++q) {
+			on_collider = on_collider || (p->flags[pair->v[q]] & PLAIT_PARTICLE_CONTACT) != 0;
+		}
+		if (!on_collider ||
+		    plait_mesh_contacts_project_pair(sim, pair, PROJECT_AFTER_COLLIDERS, &sim->ccd_hits) == 0) {
+			continue;
+		}
+		pair->pushed_last = 1;
+		contacts += 1;
+		for (int q = 0; q < n; ++q) {
+			int i = pair->v[q];
+			if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) && mc->zone_parent[i] < 0) {
+				mc->zone_parent[i] = i;
+				mc->touched[mc->touched_count++] = i;
+			}
+		}
+	}
+	if (mc->touched_count > 0) {
+		contacts +=
+		    plait_collide_listed_with_colliders(sim, mc->touched, &mc->touched_count, mc->zone_parent);
+		for (int k = 0; k < mc->touched_count; ++k) {
+			mc->zone_parent[mc->touched[k]] = -1;
+		}
+		mc->touched_count = 0;
+	}
+	return contacts;
 }
 
 void plait_mesh_contacts_project_again(plait_sim *sim)

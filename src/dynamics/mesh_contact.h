@@ -45,6 +45,10 @@ int plait_mesh_contacts_project(plait_sim *sim);
 /* A contact pass (contact.h): the listed pairs that pushed at the last collision iteration,
  * projected again, in the iteration's order. */
 void plait_mesh_contacts_project_again(plait_sim *sim);
+/* After a collision iteration's pass over the colliders: the listed pairs with a vertex on a
+ * collider projected once more, so that cloth resting on cloth that rests on a collider ends
+ * the iteration resting on it, held by its friction. Returns the contacts resolved. */
+int plait_mesh_contacts_project_on_colliders(plait_sim *sim);
 
 /* The end-of-substep guarantee; before the velocities are taken from the positions. */
 void plait_mesh_contacts_failsafe(plait_sim *sim);

@@ -138,14 +138,19 @@ typedef struct contact_pair {
 	 * closing). */
 	uint8_t restitutes;
 	uint8_t pushed;
-	uint8_t pushed_last; /* pushed at the last collision iteration: contact passes project it */
-	float distance;      /* contact distance, scene units */
+	uint8_t pushed_last;  /* pushed at the last collision iteration: contact passes project it */
+	uint8_t gives_way[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
+	uint8_t sums_substep; /* the substep push_sum and rub_sum are of (mc->substep_serial's low bits) */
+	float distance;       /* contact distance, scene units */
 	float friction;
 	float approach;
 	float side;     /* vertex-face: which side of the triangle's plane the vertex is on (+1, -1) */
 	vec3 direction; /* the others: unit vector from the second primitive to the first */
-	float scale[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
-	float lower;    /* rest pairs: a lower bound of their distance now, < 0 when unknown */
+	/* Over the substep, in the pair's separation (scene units): what its pushes closed, and
+	 * the relative tangential motion its friction took off. Coulomb's law over the substep:
+	 * friction takes at most its value times all the pushes (mesh_contact.c, rub). */
+	float push_sum, rub_sum;
+	float lower; /* rest pairs: a lower bound of their distance now, < 0 when unknown */
 } contact_pair;
 
 /* A rest pair (plait_mesh_contacts.rest_pairs): only swept, every substep, so kept small (a
@@ -687,9 +692,19 @@ bool plait_mesh_contacts_list_covers_except(plait_sim *sim, plait_mesh_contacts 
 /* The scratch of the work on the workers: freed, or made once (false when out of memory). */
 void plait_mesh_contacts_free_pieces(plait_mesh_contacts *mc, const plait_allocator *a);
 
+/* What a projection of a pair does (plait_mesh_contacts_project_pair). */
+typedef enum pair_projection {
+	PROJECT_FULL,            /* a collision iteration's: pushes, and friction */
+	PROJECT_AGAIN,           /* a contact pass's: pushes, and friction where it pushes (not
+	                          * where it only rests) */
+	PROJECT_AFTER_COLLIDERS, /* after the colliders' pass: as a full one, but no vertex that
+	                          * touched a collider in the substep moves (the colliders keep the
+	                          * last word on it) */
+} pair_projection;
+
 /* One projection of `pair` to its contact distance (mesh_contact.c), counting a CCD hit in
  * *ccd_hits. Returns 1 when it moved the pair's vertices. */
-int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, int *ccd_hits);
+int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, pair_projection how, int *ccd_hits);
 /* The list's pairs projected once, a list of PLAN_LEAST_PAIRS or more in its plan's order and on
  * the workers (mesh_contact_plan.c); returns the contacts. Each pair remembers whether it pushed
  * (pushed_last); `again` (a contact pass) projects only those that did. */
@@ -719,8 +734,9 @@ void plait_mesh_contacts_forget_rest_bounds(plait_mesh_contacts *mc);
 /* ---- mesh_contact.c ---- */
 
 /* Moves a pair's vertices so that its separation along n less its contact distance, c, becomes
- * 0 (see respond there); false when none of them gives way. */
-bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c);
+ * 0, as `how` says (see respond there); false when none of them gives way. */
+bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float c,
+                                 pair_projection how);
 
 /* ---- mesh_contact_untangle.c ---- */
 

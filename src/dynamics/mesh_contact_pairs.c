@@ -241,12 +241,15 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 	    (uint8_t)(first->bounce + second->bounce > 0.0f || first->stickiness + second->stickiness > 0.0f),
 	    0,
 	    0,
+	    {1, 1},
+	    0,
 	    distance,
 	    plait_combined_friction(first->friction, second->friction),
 	    0.0f,
 	    1.0f,
 	    {0.0f, 1.0f, 0.0f},
-	    {1.0f, 1.0f},
+	    0.0f,
+	    0.0f,
 	    -1.0f};
 	/* The thickness between two primitives never exceeds their separation at the start frame
 	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
@@ -269,7 +272,7 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 		return;
 	}
 	if (first->collision_layer != second->collision_layer) {
-		pair.scale[first->collision_layer < second->collision_layer ? 0 : 1] = 0.0f;
+		pair.gives_way[first->collision_layer < second->collision_layer ? 0 : 1] = 0;
 	}
 	start_side(&pair, start, end);
 	(void)add_pair(pass, &pair);

@@ -322,11 +322,12 @@ static int project_range(plait_sim *sim, plait_mesh_contacts *mc, int begin, int
 		contact_pair *pair = &mc->pairs[k];
 		if (again) {
 			if (pair->pushed_last && pair->distance > 0.0f) {
-				contacts += plait_mesh_contacts_project_pair(sim, pair, ccd_hits);
+				contacts += plait_mesh_contacts_project_pair(sim, pair, PROJECT_AGAIN, ccd_hits);
 			}
 			continue;
 		}
-		int pushed = pair->distance > 0.0f ? plait_mesh_contacts_project_pair(sim, pair, ccd_hits) : 0;
+		int pushed =
+		    pair->distance > 0.0f ? plait_mesh_contacts_project_pair(sim, pair, PROJECT_FULL, ccd_hits) : 0;
 		pair->pushed_last = pushed > 0;
 		contacts += pushed;
 	}

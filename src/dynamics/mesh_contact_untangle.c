@@ -530,12 +530,12 @@ int plait_mesh_contacts_push_through(plait_sim *sim, plait_mesh_contacts *mc)
 		(void)plait_closest_point_on_triangle(x, t0, t1, t2, &region, weights);
 		contact_pair pair = {.v = {push->vertex, push->target[0], push->target[1], push->target[2]},
 		                     .type = PAIR_VERTEX_FACE,
-		                     .scale = {1.0f, 1.0f}};
+		                     .gives_way = {1, 1}};
 		float g[4] = {1.0f, -weights[0], -weights[1], -weights[2]};
 		/* A contact distance at a time: all at once, a vertex a few centimetres on the wrong
 		 * side jumped through alone, and its sheet, stretched by 0.6, folded where it landed. */
 		float step = plait_maxf(along - push->distance, -push->distance);
-		pushed += plait_mesh_contacts_respond(sim, &pair, g, normal, step);
+		pushed += plait_mesh_contacts_respond(sim, &pair, g, normal, step, PROJECT_FULL);
 	}
 	return pushed;
 }

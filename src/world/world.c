@@ -22,7 +22,7 @@ plait_world_def plait_default_world_def(void)
 	def.fps = 24.0f;
 	def.substeps = 3;
 	def.max_collision_iterations = 4;
-	def.contact_pass_interval = 0;
+	def.contact_pass_interval = 1;
 	def.gravity = (plait_vec3){0.0f, -9.81f, 0.0f};
 	def.air_density = 1.0f;
 	def.wind.direction = (plait_vec3){1.0f, 0.0f, 0.0f};
