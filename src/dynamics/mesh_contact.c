@@ -225,7 +225,7 @@ static float normal_speed(const plait_particles *p, const contact_pair *pair, co
 	return v3_dot(relative, n);
 }
 
-/* The pair's sums (push_sum, rub_sum) made the substep's: zeroed at its first projection in a
+/* The pair's sums (push_sum, rubbed) made the substep's: zeroed at its first projection in a
  * substep. Every collision iteration projects every listed pair, so a pair's mark is never more
  * than a substep old, and its 8 bits cannot wrap round to a stale substep's. */
 static void sums_of_this_substep(const plait_sim *sim, contact_pair *pair)
@@ -235,7 +235,7 @@ static void sums_of_this_substep(const plait_sim *sim, contact_pair *pair)
 	if (pair->sums_substep != substep) {
 		pair->sums_substep = substep;
 		pair->push_sum = 0.0f;
-		pair->rub_sum = 0.0f;
+		pair->rubbed = v3(0.0f, 0.0f, 0.0f);
 	}
 }
 
@@ -252,22 +252,27 @@ static vec3 tangential_motion(const plait_particles *p, const contact_pair *pair
 }
 
 /* Coulomb's law over the substep: friction takes off the pair's relative tangential motion of
- * the substep, at most its value times all the pushes of the substep (push_sum, this one's
- * included) less what it took before. With one push a substep that is the push's own share;
- * with several (collision iterations, contact passes) each took its limit from its own push
- * before, and a push of a few micrometres after stretch iterations could not hold what the
- * substep's motion had carried: cloth resting on cloth crept down a slope, 37 mm in 2 s at 20
- * degrees with friction 0.5. Returns the motion to take off (0 when none). */
-static vec3 rub(contact_pair *pair, vec3 tangential)
+ * the substep, all of it while what it took off in all (the vector `rubbed`) stays within its
+ * value times all the pushes of the substep (push_sum, this one's included). The clamp is on
+ * that total, as sequential impulses clamp an accumulated impulse: what the constraint
+ * iterations carry to and fro between passes is taken off again without spending the limit
+ * again, and a later pass may give back what an earlier one took too much of. With one push a
+ * substep that is the push's own share. With each pass's own push as its limit, a push of a few
+ * micrometres after stretch iterations could not hold what the substep's motion had carried:
+ * cloth resting on cloth crept down a slope, 37 mm in 2 s at 20 degrees with friction 0.5.
+ * tangential: the relative motion left, off the normal n. Returns the motion to take off. */
+static vec3 rub(contact_pair *pair, vec3 tangential, vec3 n)
 {
-	float length = v3_length(tangential);
-	float limit = pair->friction * pair->push_sum - pair->rub_sum;
-	if (!(length > 0.0f) || !(limit > 0.0f)) {
-		return v3(0.0f, 0.0f, 0.0f);
+	vec3 total = v3_add(pair->rubbed, tangential);
+	total = v3_mul_add(total, -v3_dot(total, n), n);
+	float length = v3_length(total);
+	float limit = pair->friction * pair->push_sum;
+	if (!(length <= limit)) {
+		total = length > 0.0f && limit > 0.0f ? v3_scale(total, limit / length) : v3(0.0f, 0.0f, 0.0f);
 	}
-	float taken = plait_minf(length, limit);
-	pair->rub_sum += taken;
-	return v3_scale(tangential, taken / length);
+	vec3 taken = v3_sub(total, pair->rubbed);
+	pair->rubbed = total;
+	return taken;
 }
 
 /* Moves the pair's vertices so that C = (separation along n) - distance becomes 0: the vertices
@@ -293,7 +298,7 @@ bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float
 	pair->push_sum += depth;
 	vec3 move = v3_scale(n, depth);
 	if (pair->friction > 0.0f) {
-		move = v3_sub(move, rub(pair, tangential_motion(p, pair, g, n)));
+		move = v3_sub(move, rub(pair, tangential_motion(p, pair, g, n), n));
 	}
 	vec3 step = v3_scale(move, shortened);
 	/* Only vertices that give way are written: one that never moves (inverse mass 0) may be
@@ -336,7 +341,7 @@ static void rub_resting(plait_sim *sim, contact_pair *pair, const float *g, vec3
 	if (shortened == 0.0f) {
 		return;
 	}
-	vec3 step = v3_scale(rub(pair, tangential_motion(p, pair, g, n)), -shortened);
+	vec3 step = v3_scale(rub(pair, tangential_motion(p, pair, g, n), n), -shortened);
 	for (int k = 0; k < pair_size[pair->type]; ++k) {
 		if (w[k] != 0.0f) {
 			int i = pair->v[k];

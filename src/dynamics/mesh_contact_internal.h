@@ -140,16 +140,17 @@ typedef struct contact_pair {
 	uint8_t pushed;
 	uint8_t pushed_last;  /* pushed at the last collision iteration: contact passes project it */
 	uint8_t gives_way[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
-	uint8_t sums_substep; /* the substep push_sum and rub_sum are of (mc->substep_serial's low bits) */
+	uint8_t sums_substep; /* the substep push_sum and rubbed are of (mc->substep_serial's low bits) */
 	float distance;       /* contact distance, scene units */
 	float friction;
 	float approach;
 	float side;     /* vertex-face: which side of the triangle's plane the vertex is on (+1, -1) */
 	vec3 direction; /* the others: unit vector from the second primitive to the first */
 	/* Over the substep, in the pair's separation (scene units): what its pushes closed, and
-	 * the relative tangential motion its friction took off. Coulomb's law over the substep:
-	 * friction takes at most its value times all the pushes (mesh_contact.c, rub). */
-	float push_sum, rub_sum;
+	 * the relative tangential motion its friction took off in all, a vector. Coulomb's law over
+	 * the substep: that stays within friction times all the pushes (mesh_contact.c, rub). */
+	float push_sum;
+	vec3 rubbed;
 	float lower; /* rest pairs: a lower bound of their distance now, < 0 when unknown */
 } contact_pair;
 

@@ -249,7 +249,7 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 	    1.0f,
 	    {0.0f, 1.0f, 0.0f},
 	    0.0f,
-	    0.0f,
+	    {0.0f, 0.0f, 0.0f},
 	    -1.0f};
 	/* The thickness between two primitives never exceeds their separation at the start frame
 	 * (seed 000 §4.5): a pair of two objects that started closer keeps that closeness. (Within
