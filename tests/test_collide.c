@@ -566,37 +566,44 @@ Test(collide, a_tube_over_a_bending_arm_never_crosses_itself_or_the_arm)
 	}
 }
 
-/* The arm scene at n with the given options: clean in every frame, and the failsafe carried
- * zones with a collider (else the start no longer tests the carry). Without contact passes: they
- * keep the sleeve out of the arm well enough that the failsafe finds no zone to carry from these
- * starts, which were found without them. */
-static void expect_clean_arm_carrying_zones(const collide_scene_options *given, int n, const char *label)
-{
-	collide_scene_options options = *given;
-	options.contact_pass_interval = 0;
-	collide_scene scene;
-	scene_totals t = run_scene_with(SCENE_ARM, n, 0, &options, &scene);
-	char name[48];
-	snprintf(name, sizeof name, "%s at %d, variant %d", label, n, options.variant);
-	expect_clean(&t, name);
-	const plait_mesh_contacts *mc = scene.world.world->sim.mesh_contacts;
-	cr_expect_gt(mc->carried_zones, 0, "%s: no zone was carried, so nothing was tested", name);
-	collide_scene_destroy(&scene);
-}
-
-/* expect_clean_arm_carrying_zones for the box arm from each of `count` starts (n, variant). */
+/* A start of the arm scene: its size n and its variant. */
 typedef struct arm_start {
 	int n, variant;
 } arm_start;
 
+/* The arm scene from each of `count` starts with the given options: clean in every frame, and
+ * the failsafe carried zones with a collider from one start at least (else the starts no longer
+ * test the carry: which starts carry depends on every change to how cloth moves, so a test holds
+ * a few, those that once failed among them). Without contact passes: they keep the sleeve out
+ * of the arm well enough that the failsafe finds no zone to carry from these starts, which were
+ * found without them. */
+static void expect_clean_arm_carrying_zones(const collide_scene_options *given, const arm_start *starts,
+                                            int count, const char *label)
+{
+	long carried = 0;
+	for (int k = 0; k < count; ++k) {
+		collide_scene_options options = *given;
+		options.contact_pass_interval = 0;
+		options.variant = starts[k].variant;
+		collide_scene scene;
+		scene_totals t = run_scene_with(SCENE_ARM, starts[k].n, 0, &options, &scene);
+		char name[48];
+		snprintf(name, sizeof name, "%s at %d, variant %d", label, starts[k].n, starts[k].variant);
+		expect_clean(&t, name);
+		const plait_mesh_contacts *mc = scene.world.world->sim.mesh_contacts;
+		cr_log_info("%s: %ld zones carried", name, (long)mc->carried_zones);
+		carried += mc->carried_zones;
+		collide_scene_destroy(&scene);
+	}
+	cr_expect_gt(carried, 0, "%s: no zone was carried from any start, so nothing was tested", label);
+}
+
+/* expect_clean_arm_carrying_zones for the box arm. */
 static void expect_clean_box_arm_carrying_zones(const arm_start *starts, int count)
 {
-	for (int k = 0; k < count; ++k) {
-		collide_scene_options options = collide_scene_default_options();
-		options.box_colliders = true;
-		options.variant = starts[k].variant;
-		expect_clean_arm_carrying_zones(&options, starts[k].n, "box arm");
-	}
+	collide_scene_options options = collide_scene_default_options();
+	options.box_colliders = true;
+	expect_clean_arm_carrying_zones(&options, starts, count, "box arm");
 }
 
 /* The forearm turning over cloth the failsafe put back where its substep began would leave
@@ -606,18 +613,13 @@ static void expect_clean_box_arm_carrying_zones(const arm_start *starts, int cou
  * (mesh_contact_failsafe.c, carry_back). From these nearby starts the sleeve ended inside the
  * arm before: at n = 14, variant 1 with 4 triangles in it, 5 with 5 vertices and 28 triangles,
  * 21 with 5 vertices and 22 triangles (still 5 and 21 when carried but not slid); at n = 16,
- * variant 29 with 1 vertex (3 when carried but not slid). Since friction between cloths is summed
- * over the substep (session 33) variant 1 carries no zone; 33 carries the most of 40 starts. */
+ * variant 29 with 1 vertex (3 when carried but not slid). 33 carried the most zones of 40 starts
+ * in session 33. */
 Test(collide, cloth_put_back_by_the_failsafe_moves_with_the_collider_it_lay_on)
 {
-	struct {
-		int n, variant;
-	} starts[4] = {{14, 33}, {14, 5}, {14, 21}, {16, 29}};
-	for (int k = 0; k < 4; ++k) {
-		collide_scene_options options = collide_scene_default_options();
-		options.variant = starts[k].variant;
-		expect_clean_arm_carrying_zones(&options, starts[k].n, "arm");
-	}
+	const arm_start starts[5] = {{14, 1}, {14, 5}, {14, 21}, {16, 29}, {14, 33}};
+	collide_scene_options options = collide_scene_default_options();
+	expect_clean_arm_carrying_zones(&options, starts, 5, "arm");
 }
 
 /* The same sleeve over the arm given as two closed capsule meshes (912 triangles each), the

@@ -251,6 +251,24 @@ static vec3 tangential_motion(const plait_particles *p, const contact_pair *pair
 	return v3_mul_add(relative, -v3_dot(relative, n), n);
 }
 
+/* After the colliders' pass (PROJECT_AFTER_COLLIDERS), the vertices a pair moves (w != 0) are
+ * marked in mc->around (all 0 between the failsafe's sweeps and outside them), to go through
+ * the colliders again (plait_mesh_contacts_project_on_colliders). Pairs projected side by side
+ * share no vertex that moves (mesh_contact_plan.c), so no two write one byte. */
+static void note_moved_after_colliders(plait_sim *sim, const contact_pair *pair, const float *w,
+                                       pair_projection how)
+{
+	if (how != PROJECT_AFTER_COLLIDERS) {
+		return;
+	}
+	plait_mesh_contacts *mc = sim->mesh_contacts;
+	for (int k = 0; k < pair_size[pair->type]; ++k) {
+		if (w[k] != 0.0f) {
+			mc->around[pair->v[k]] = 1;
+		}
+	}
+}
+
 /* Coulomb's law over the substep: friction takes off the pair's relative tangential motion of
  * the substep, all of it while what it took off in all (the vector `rubbed`) stays within its
  * value times all the pushes of the substep (push_sum, this one's included). The clamp is on
@@ -309,6 +327,7 @@ bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float
 			p->point[i].x = v3_mul_add(p->point[i].x, w[k] * g[k], step);
 		}
 	}
+	note_moved_after_colliders(sim, pair, w, how);
 	if (pair->restitutes && !pair->pushed) {
 		pair->pushed = 1;
 		pair->approach = normal_speed(p, pair, g, n);
@@ -348,6 +367,7 @@ static void rub_resting(plait_sim *sim, contact_pair *pair, const float *g, vec3
 			p->point[i].x = v3_mul_add(p->point[i].x, w[k] * g[k], step);
 		}
 	}
+	note_moved_after_colliders(sim, pair, w, how);
 }
 
 /* For an edge-edge, vertex-edge or vertex-vertex pair at points x: the vector from the second
@@ -613,37 +633,21 @@ void plait_mesh_contacts_restitute(plait_sim *sim)
  * Vertices on a collider stay, the others move only away from it (push_shares), and those moved
  * go through the colliders again (plait_collide_listed_with_colliders, in the failsafe's
  * scratch, which is empty between its runs): on the arm, a vertex pushed away from one capsule
- * ended in the other one. On the calling thread, in the list's order. */
+ * ended in the other one. In the plan's order and on the workers, as the collision iteration's
+ * projection. */
 int plait_mesh_contacts_project_on_colliders(plait_sim *sim)
 {
 	plait_mesh_contacts *mc = sim->mesh_contacts;
-	if (mc == NULL || !mc->active || mc->tangle_count > 0) {
+	if (mc == NULL || !mc->active || mc->pair_count == 0 || mc->tangle_count > 0) {
 		return 0;
 	}
-	const plait_particles *p = &sim->particles;
-	int contacts = 0;
-	for (int k = 0; k < mc->pair_count; ++k) {
-		contact_pair *pair = &mc->pairs[k];
-		if (!(pair->distance > 0.0f)) {
-			continue;
-		}
-		int n = pair_size[pair->type];
-		bool on_collider = false;
-		for (int q = 0; q < n; ++q) {
-			on_collider = on_collider || (p->flags[pair->v[q]] & PLAIT_PARTICLE_CONTACT) != 0;
-		}
-		if (!on_collider ||
-		    plait_mesh_contacts_project_pair(sim, pair, PROJECT_AFTER_COLLIDERS, &sim->ccd_hits) == 0) {
-			continue;
-		}
-		pair->pushed_last = 1;
-		contacts += 1;
-		for (int q = 0; q < n; ++q) {
-			int i = pair->v[q];
-			if (!(p->flags[i] & PLAIT_PARTICLE_CONTACT) && mc->zone_parent[i] < 0) {
-				mc->zone_parent[i] = i;
-				mc->touched[mc->touched_count++] = i;
-			}
+	int contacts = plait_mesh_contacts_project_list(sim, mc, PROJECT_AFTER_COLLIDERS);
+	int count = sim->particles.count;
+	for (int i = 0; i < count; ++i) {
+		if (mc->around[i]) {
+			mc->around[i] = 0;
+			mc->zone_parent[i] = i;
+			mc->touched[mc->touched_count++] = i;
 		}
 	}
 	if (mc->touched_count > 0) {
@@ -661,7 +665,7 @@ void plait_mesh_contacts_project_again(plait_sim *sim)
 {
 	plait_mesh_contacts *mc = sim->mesh_contacts;
 	if (mc != NULL && mc->active && mc->pair_count > 0 && mc->tangle_count == 0) {
-		(void)plait_mesh_contacts_project_list(sim, mc, true);
+		(void)plait_mesh_contacts_project_list(sim, mc, PROJECT_AGAIN);
 	}
 }
 
@@ -694,7 +698,7 @@ int plait_mesh_contacts_project(plait_sim *sim)
 		}
 		mc->gathered = true;
 	}
-	int contacts = plait_mesh_contacts_project_list(sim, mc, false);
+	int contacts = plait_mesh_contacts_project_list(sim, mc, PROJECT_FULL);
 	if (mc->tangle_push_count > 0) {
 		contacts += plait_mesh_contacts_push_through(sim, mc);
 	}

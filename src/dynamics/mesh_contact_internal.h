@@ -706,10 +706,12 @@ typedef enum pair_projection {
 /* One projection of `pair` to its contact distance (mesh_contact.c), counting a CCD hit in
  * *ccd_hits. Returns 1 when it moved the pair's vertices. */
 int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, pair_projection how, int *ccd_hits);
-/* The list's pairs projected once, a list of PLAN_LEAST_PAIRS or more in its plan's order and on
- * the workers (mesh_contact_plan.c); returns the contacts. Each pair remembers whether it pushed
- * (pushed_last); `again` (a contact pass) projects only those that did. */
-int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, bool again);
+/* The list's pairs projected once as `how` says, a list of PLAN_LEAST_PAIRS or more in its
+ * plan's order and on the workers (mesh_contact_plan.c); returns the contacts. A collision
+ * iteration's projection (PROJECT_FULL) notes in each pair whether it pushed (pushed_last); a
+ * contact pass projects only those that did; after the colliders, only those with a vertex that
+ * touched a collider in the substep (and a push notes it too). */
+int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, pair_projection how);
 /* Puts the list in the plan's order, unless it is already; false when out of memory (the list
  * then keeps its order and is projected one pair after another: another result than the plan's,
  * but still the same for any number of threads). */

@@ -309,26 +309,52 @@ bool plait_mesh_contacts_plan(plait_sim *sim, plait_mesh_contacts *mc)
 typedef struct project_job {
 	plait_sim *sim;
 	plait_mesh_contacts *mc;
-	bool again; /* a contact pass: only the pairs that pushed at the last collision iteration */
+	pair_projection how;
 	_Atomic int contacts;
 	_Atomic int ccd_hits;
 } project_job;
 
-static int project_range(plait_sim *sim, plait_mesh_contacts *mc, int begin, int end, bool again,
+/* Whether a projection `how` takes the pair: a contact pass, those that pushed at the last
+ * collision iteration; after the colliders, those with a vertex that touched a collider in the
+ * substep. */
+static bool takes_pair(const plait_sim *sim, const contact_pair *pair, pair_projection how)
+{
+	if (!(pair->distance > 0.0f)) {
+		return false;
+	}
+	if (how == PROJECT_AGAIN) {
+		return pair->pushed_last;
+	}
+	if (how == PROJECT_AFTER_COLLIDERS) {
+		const uint8_t *flags = sim->particles.flags;
+		for (int q = 0; q < pair_size[pair->type]; ++q) {
+			if (flags[pair->v[q]] & PLAIT_PARTICLE_CONTACT) {
+				return true;
+			}
+		}
+		return false;
+	}
+	return true;
+}
+
+static int project_range(plait_sim *sim, plait_mesh_contacts *mc, int begin, int end, pair_projection how,
                          int *ccd_hits)
 {
 	int contacts = 0;
 	for (int k = begin; k < end; ++k) {
 		contact_pair *pair = &mc->pairs[k];
-		if (again) {
-			if (pair->pushed_last && pair->distance > 0.0f) {
-				contacts += plait_mesh_contacts_project_pair(sim, pair, PROJECT_AGAIN, ccd_hits);
+		if (!takes_pair(sim, pair, how)) {
+			if (how == PROJECT_FULL) {
+				pair->pushed_last = 0;
 			}
 			continue;
 		}
-		int pushed =
-		    pair->distance > 0.0f ? plait_mesh_contacts_project_pair(sim, pair, PROJECT_FULL, ccd_hits) : 0;
-		pair->pushed_last = pushed > 0;
+		int pushed = plait_mesh_contacts_project_pair(sim, pair, how, ccd_hits);
+		if (how == PROJECT_FULL) {
+			pair->pushed_last = pushed > 0;
+		} else if (how == PROJECT_AFTER_COLLIDERS) {
+			pair->pushed_last = pair->pushed_last || pushed > 0;
+		}
 		contacts += pushed;
 	}
 	return contacts;
@@ -339,19 +365,19 @@ static void project_groups(void *context, int begin, int end)
 	project_job *job = context;
 	int ccd_hits = 0;
 	int contacts = project_range(job->sim, job->mc, job->mc->group_start[begin], job->mc->group_start[end],
-	                             job->again, &ccd_hits);
+	                             job->how, &ccd_hits);
 	atomic_fetch_add_explicit(&job->contacts, contacts, memory_order_relaxed);
 	atomic_fetch_add_explicit(&job->ccd_hits, ccd_hits, memory_order_relaxed);
 }
 
-int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, bool again)
+int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, pair_projection how)
 {
 	bool planned = mc->pair_count >= PLAN_LEAST_PAIRS && plait_mesh_contacts_plan(sim, mc);
 	if (!planned) {
-		return project_range(sim, mc, 0, mc->pair_count, again, &sim->ccd_hits);
+		return project_range(sim, mc, 0, mc->pair_count, how, &sim->ccd_hits);
 	}
-	mc->plan_projections += !again;
-	project_job job = {sim, mc, again, 0, 0};
+	mc->plan_projections += how == PROJECT_FULL;
+	project_job job = {sim, mc, how, 0, 0};
 	/* The stages, each after the one before: slabs, even borders, odd borders. Then the wide
 	 * pairs and those a mending added, on the calling thread. */
 	for (int k = 0; k < PLAN_STAGES; ++k) {
@@ -361,5 +387,5 @@ int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, bo
 	sim->ccd_hits += atomic_load_explicit(&job.ccd_hits, memory_order_relaxed);
 	int contacts = atomic_load_explicit(&job.contacts, memory_order_relaxed);
 	return contacts +
-	       project_range(sim, mc, mc->group_start[PLAN_WIDE_GROUP], mc->pair_count, again, &sim->ccd_hits);
+	       project_range(sim, mc, mc->group_start[PLAN_WIDE_GROUP], mc->pair_count, how, &sim->ccd_hits);
 }
