@@ -2024,7 +2024,9 @@ Test(collide, sheets_that_start_closer_than_their_thickness_do_not_explode)
 /* A small sheet on a plane tilted by `degrees` about z, both with friction mu, with contact passes
  * every `interval` stretch iterations (0: none). Returns how far the sheet's centre moved along
  * the slope in 2 s. */
-static float slide_on_tilted_plane(float degrees, float mu, int interval)
+/* A world at 60 fps without air, contact passes every `interval` stretch iterations, with a
+ * plane through the origin tilted by `degrees` about z, of friction mu; *plane gets its def. */
+static plait_world_id world_with_a_slope(float degrees, float mu, int interval, plait_collider_def *plane)
 {
 	plait_world_def def = plait_default_world_def();
 	def.air_density = 0.0f;
@@ -2032,10 +2034,18 @@ static float slide_on_tilted_plane(float degrees, float mu, int interval)
 	def.contact_pass_interval = interval;
 	plait_world_id world = plait_create_world(&def, NULL);
 	float angle = degrees * 3.14159265f / 180.0f;
-	plait_collider_def plane = plait_default_collider_def();
-	plane.normal = (plait_vec3){-sinf(angle), cosf(angle), 0.0f};
-	plane.surface.friction = mu;
-	plait_create_collider(world, &plane, NULL);
+	*plane = plait_default_collider_def();
+	plane->normal = (plait_vec3){-sinf(angle), cosf(angle), 0.0f};
+	plane->surface.friction = mu;
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, plane, NULL)));
+	return world;
+}
+
+static float slide_on_tilted_plane(float degrees, float mu, int interval)
+{
+	plait_collider_def plane;
+	plait_world_id world = world_with_a_slope(degrees, mu, interval, &plane);
+	float angle = degrees * 3.14159265f / 180.0f;
 	test_grid grid = test_grid_make(6, 6, 0.3f, 0.3f);
 	plait_vec3 tangent = {cosf(angle), sinf(angle), 0.0f};
 	for (int i = 0; i < grid.vertex_count; ++i) {
@@ -2099,17 +2109,10 @@ Test(collide, cloth_on_a_tilted_plane_sticks_when_tan_theta_is_below_mu_and_slid
  * lower sheet's centre, in `seconds`. */
 static float slide_on_a_sheet_on_a_slope(float degrees, float mu, int interval, float seconds)
 {
-	plait_world_def def = plait_default_world_def();
-	def.air_density = 0.0f;
-	def.fps = 60.0f;
-	def.contact_pass_interval = interval;
-	plait_world_id world = plait_create_world(&def, NULL);
+	plait_collider_def plane;
+	plait_world_id world = world_with_a_slope(degrees, 1.0f, interval, &plane);
 	float angle = degrees * 3.14159265f / 180.0f;
-	plait_vec3 normal = {-sinf(angle), cosf(angle), 0.0f}, tangent = {cosf(angle), sinf(angle), 0.0f};
-	plait_collider_def plane = plait_default_collider_def();
-	plane.normal = normal;
-	plane.surface.friction = 1.0f;
-	plait_create_collider(world, &plane, NULL);
+	plait_vec3 normal = plane.normal, tangent = {cosf(angle), sinf(angle), 0.0f};
 	const float thickness = 0.005f;
 	plait_object_id sheets[2];
 	int centres[2];
@@ -2134,7 +2137,7 @@ static float slide_on_a_sheet_on_a_slope(float degrees, float mu, int interval, 
 		before[k] = grid.positions[centres[k]];
 		test_grid_free(&grid);
 	}
-	cr_assert(test_step_frames(world, (int)lroundf(seconds * def.fps)));
+	cr_assert(test_step_frames(world, (int)lroundf(seconds * 60.0f)));
 	plait_intersection_report report;
 	cr_assert_eq(plait_world_check_intersections(world, &report, NULL), PLAIT_OK);
 	cr_expect_eq(report.triangle_pairs, 0, "the sheets cross");
