@@ -296,7 +296,7 @@ static vec3 rub(contact_pair *pair, vec3 tangential, vec3 n)
 /* Moves the pair's vertices so that C = (separation along n) - distance becomes 0: the vertices
  * move along n by their inverse mass times their weight g (the constraint's gradient), and
  * friction (rub) takes off relative tangential motion of the substep. Unlike a collider's contact
- * pass, a pair's rubs in contact passes too: without it a coarse sheet balanced on a mesh
+ * pass, a pair rubs in contact passes too: without it a coarse sheet balanced on a mesh
  * spike's tip (friction 0.1) slid off it, and cloth slid down cloth at 35 degrees with friction
  * 0.5 as with 0.4 (performance.md, session 33). A pair whose surfaces bounce or stick notes its
  * first push of the substep, with its approach (v still holds the velocities of the substep's
