@@ -408,6 +408,7 @@ Test(cli_run, explain_lists_contact_passes)
 	free_result(&r);
 	r = explain_sheet_on_ground(dir, "{\"contact_pass_interval\": 0}");
 	cr_expect(strstr(r.out, "contact,") == NULL, "a contact pass listed with them off:\n%s", r.out);
+	cr_expect(strstr(r.out, "no contact passes (contact_pass_interval 0)") != NULL, "%s", r.out);
 	cr_expect(strstr(r.out, "note: up to 7 stretch passes per collision pass") != NULL, "%s", r.out);
 	cr_expect(strstr(r.out, "contact_pass_interval") != NULL, "%s", r.out);
 	free_result(&r);

@@ -115,8 +115,8 @@ static void plait_explain_stretch_note(const plait_scene *scene, plait_world_id 
 		    out,
 		    "note: up to %d stretch passes per collision pass in a substep: cloth resting on a collider\n"
 		    "      stretches where it rests (the stretch passes pull it in, the collision pass pushes it\n"
-		    "      out). \"contact_pass_interval\": 1 in the world adds cheap contact passes between them\n"
-		    "      (docs/architecture.md, \"Contact passes\"); more substeps also help.\n",
+		    "      out). \"contact_pass_interval\": 1 in the world (the default) adds cheap contact passes\n"
+		    "      between them (docs/architecture.md, \"Contact passes\"); more substeps also help.\n",
 		    most);
 }
 
@@ -129,6 +129,8 @@ static void plait_explain_text(const plait_scene *scene, plait_world_id world, F
 	if (w.contact_pass_interval > 0)
 		fprintf(out, "  a contact pass or collision iteration at least every %d stretch iterations\n",
 		        w.contact_pass_interval);
+	else
+		fprintf(out, "  no contact passes (contact_pass_interval 0): collision iterations only\n");
 	fprintf(out, "  gravity [%g, %g, %g] m/s^2, air density %g kg/m^3\n", w.gravity.x, w.gravity.y,
 	        w.gravity.z, w.air_density);
 	if (w.wind.speed > 0.0f)
