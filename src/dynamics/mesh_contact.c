@@ -226,8 +226,10 @@ static float normal_speed(const plait_particles *p, const contact_pair *pair, co
 }
 
 /* The pair's sums (push_sum, rubbed) made the substep's: zeroed at its first projection in a
- * substep. Every collision iteration projects every listed pair, so a pair's mark is never more
- * than a substep old, and its 8 bits cannot wrap round to a stale substep's. */
+ * substep (plait_mesh_contacts_project_pair, before anything reads them; the untangling's pairs
+ * are made anew for each push). Every collision iteration projects every listed pair, so a
+ * pair's mark is never more than a substep old, and its 8 bits cannot wrap round to a stale
+ * substep's. */
 static void sums_of_this_substep(const plait_sim *sim, contact_pair *pair)
 {
 	const plait_mesh_contacts *mc = sim->mesh_contacts;
@@ -311,7 +313,6 @@ bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float
 	if (shortened == 0.0f) {
 		return false;
 	}
-	sums_of_this_substep(sim, pair);
 	float depth = -c;
 	pair->push_sum += depth;
 	vec3 move = v3_scale(n, depth);
@@ -350,7 +351,6 @@ static void rub_resting(plait_sim *sim, contact_pair *pair, const float *g, vec3
 	    !(separation < pair->distance * (1.0f + RESTING_SLACK))) {
 		return;
 	}
-	sums_of_this_substep(sim, pair);
 	if (!(pair->push_sum > 0.0f)) {
 		return;
 	}
