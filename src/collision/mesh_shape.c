@@ -381,6 +381,17 @@ static inline float box_distance_sq(const plait_bvh_node *n, vec3 p)
 	return v3_length_sq(v3_sub(v3_max(n->lower, v3_min(p, n->upper)), p));
 }
 
+/* The squared distances below which a triangle is nearer than the nearest so far (best_sq), and
+ * up to which it ties with it: within 5e-6 of the distance plus `slack`, what rounding leaves of
+ * two triangles' distances to one point they share (plait_mesh_shape_distance). */
+static void tie_window(float best_sq, float slack, float *nearer_sq, float *tied_sq)
+{
+	float best = sqrtf(best_sq), tolerance = 5e-6f * best + slack;
+	float low = best - tolerance, high = best + tolerance;
+	*nearer_sq = low > 0.0f ? low * low : 0.0f;
+	*tied_sq = high * high;
+}
+
 float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *normal)
 {
 	/* Branch and bound over the hierarchy. Where several triangles share the nearest point (an
@@ -389,8 +400,21 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 	 * inside. A child goes on the stack with its box's distance, only if that is within the
 	 * bound at the time, and is passed over when it is popped if the bound has come nearer
 	 * since (the nearer child is pushed last, popped first: its triangles tighten the bound
-	 * that prunes the other). */
-	float best_sq = INFINITY, best_alignment = -INFINITY;
+	 * that prunes the other).
+	 *
+	 * Two triangles' distances to a point they share agree only to rounding, which is absolute,
+	 * about the float spacing of the coordinates, not a share of the distance: 9.7 mm beside a
+	 * table's rim, 0.75 m up and 2.3 um under its top, the top's distance (to the rim) came out
+	 * 1.2e-5 of itself nearer than the side's (to its face), so the top gave the sign, and a
+	 * vertex outside the table was taken for 9.7 mm inside it. Hence `slack`: 4e-6 of the largest
+	 * coordinate of p and of the mesh's box, about thirty times the float spacing there. */
+	const plait_bvh_node *root = &shape->nodes[0];
+	vec3 far = v3_max(v3_max(v3(fabsf(p.x), fabsf(p.y), fabsf(p.z)),
+	                         v3(fabsf(root->lower.x), fabsf(root->lower.y), fabsf(root->lower.z))),
+	                  v3(fabsf(root->upper.x), fabsf(root->upper.y), fabsf(root->upper.z)));
+	float slack = 4e-6f * plait_maxf(far.x, plait_maxf(far.y, far.z));
+	float best_sq = INFINITY, nearer_sq = INFINITY, tied_sq = INFINITY, best_alignment = -INFINITY;
+	float nearest_sq = INFINITY; /* of every triangle nearer or tied: the distance returned */
 	int best = -1;
 	vec3 best_point = p;
 	int stack[64], depth = 0;
@@ -399,7 +423,7 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 	stack_distance_sq[depth++] = box_distance_sq(&shape->nodes[0], p);
 	while (depth > 0) {
 		--depth;
-		if (stack_distance_sq[depth] > best_sq * (1.0f + 1e-5f)) {
+		if (stack_distance_sq[depth] > tied_sq) {
 			continue;
 		}
 		const plait_bvh_node *n = &shape->nodes[stack[depth]];
@@ -408,7 +432,7 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 				/* The triangle's box is a bound as cheap as the node's: a triangle whose box is
 				 * beyond the bound is neither nearer nor tied. */
 				vec3 to_box = v3_sub(v3_max(shape->slot_lower[k], v3_min(p, shape->slot_upper[k])), p);
-				if (v3_length_sq(to_box) > best_sq * (1.0f + 1e-5f)) {
+				if (v3_length_sq(to_box) > tied_sq) {
 					continue;
 				}
 				const vec3 *corner = &shape->slot_corners[3 * k];
@@ -416,15 +440,17 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 				vec3 q = plait_closest_point_on_triangle(p, corner[0], corner[1], corner[2], &region, NULL);
 				vec3 d = v3_sub(p, q);
 				float d_sq = v3_length_sq(d);
-				bool nearer = d_sq < best_sq * (1.0f - 1e-5f);
-				bool tied = !nearer && d_sq <= best_sq * (1.0f + 1e-5f);
+				bool nearer = d_sq < nearer_sq;
+				bool tied = !nearer && d_sq <= tied_sq;
 				if (!nearer && !tied) {
 					continue;
 				}
+				nearest_sq = plait_minf(nearest_sq, d_sq);
 				int t = shape->triangle_order[k];
 				float alignment = v3_dot(d, shape->normals[t]);
 				if (nearer || alignment > best_alignment) {
 					best_sq = nearer ? d_sq : plait_minf(best_sq, d_sq);
+					tie_window(best_sq, slack, &nearer_sq, &tied_sq);
 					best_alignment = alignment;
 					best = t;
 					best_point = q;
@@ -436,7 +462,7 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 			bool left_first = to_left <= to_right;
 			int near_child = left_first ? n->first : n->first + 1;
 			float near_sq = left_first ? to_left : to_right, far_sq = left_first ? to_right : to_left;
-			float bound = best_sq * (1.0f + 1e-5f);
+			float bound = tied_sq;
 			if (far_sq <= bound) {
 				stack[depth] = left_first ? n->first + 1 : n->first;
 				stack_distance_sq[depth++] = far_sq;
@@ -453,6 +479,6 @@ float plait_mesh_shape_distance(const plait_mesh_shape *shape, vec3 p, vec3 *nor
 	}
 	vec3 n = shape->normals[best];
 	*normal = v3_length_sq(n) > 0.0f ? n : v3(0.0f, 1.0f, 0.0f);
-	float distance = sqrtf(v3_length_sq(v3_sub(p, best_point)));
+	float distance = sqrtf(nearest_sq);
 	return v3_dot(v3_sub(p, best_point), *normal) < 0.0f ? -distance : distance;
 }
