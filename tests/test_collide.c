@@ -2021,12 +2021,14 @@ Test(collide, sheets_that_start_closer_than_their_thickness_do_not_explode)
 	plait_destroy_world(world);
 }
 
-/* A small sheet on a plane tilted by `degrees` about z, both with friction mu, with contact passes
- * every `interval` stretch iterations (0: none). Returns how far the sheet's centre moved along
- * the slope in 2 s. */
+/* What a slope test's cloth lies on: a plane, or a triangle mesh (1 m squares, 24 m across). */
+typedef enum slope_ground { SLOPE_PLANE, SLOPE_MESH } slope_ground;
+
 /* A world at 60 fps without air, contact passes every `interval` stretch iterations, with a
- * plane through the origin tilted by `degrees` about z, of friction mu; *plane gets its def. */
-static plait_world_id world_with_a_slope(float degrees, float mu, int interval, plait_collider_def *plane)
+ * ground through the origin tilted by `degrees` about z, of friction mu; *normal gets its
+ * upward normal. */
+static plait_world_id world_with_a_slope(slope_ground ground, float degrees, float mu, int interval,
+                                         plait_vec3 *normal)
 {
 	plait_world_def def = plait_default_world_def();
 	def.air_density = 0.0f;
@@ -2034,30 +2036,45 @@ static plait_world_id world_with_a_slope(float degrees, float mu, int interval, 
 	def.contact_pass_interval = interval;
 	plait_world_id world = plait_create_world(&def, NULL);
 	float angle = degrees * 3.14159265f / 180.0f;
-	*plane = plait_default_collider_def();
-	plane->normal = (plait_vec3){-sinf(angle), cosf(angle), 0.0f};
-	plane->surface.friction = mu;
-	cr_assert(!plait_object_id_is_null(plait_create_collider(world, plane, NULL)));
+	*normal = (plait_vec3){-sinf(angle), cosf(angle), 0.0f};
+	plait_collider_def slope = plait_default_collider_def();
+	slope.normal = *normal;
+	slope.surface.friction = mu;
+	test_grid grid = {0};
+	if (ground == SLOPE_MESH) {
+		grid = test_grid_make(24, 24, 24.0f, 24.0f);
+		for (int i = 0; i < grid.vertex_count; ++i) {
+			plait_vec3 p = grid.positions[i];
+			grid.positions[i] = (plait_vec3){p.x * cosf(angle), p.x * sinf(angle), p.z};
+		}
+		slope.shape = PLAIT_SHAPE_MESH;
+		slope.mesh = test_grid_mesh(&grid);
+	}
+	cr_assert(!plait_object_id_is_null(plait_create_collider(world, &slope, NULL)));
+	test_grid_free(&grid);
 	return world;
 }
 
-static float slide_on_tilted_plane(float degrees, float mu, int interval)
+/* A 0.3 m sheet of quads x quads, `thickness` thick, with friction mu, laid on a slope (above)
+ * a thickness above it. Returns how far the sheet's centre moved down the slope in 2 s. */
+static float slide_on_a_slope(slope_ground ground, float degrees, float mu, int interval, int quads,
+                              float thickness)
 {
-	plait_collider_def plane;
-	plait_world_id world = world_with_a_slope(degrees, mu, interval, &plane);
+	plait_vec3 normal;
+	plait_world_id world = world_with_a_slope(ground, degrees, mu, interval, &normal);
 	float angle = degrees * 3.14159265f / 180.0f;
-	test_grid grid = test_grid_make(6, 6, 0.3f, 0.3f);
+	test_grid grid = test_grid_make(quads, quads, 0.3f, 0.3f);
 	plait_vec3 tangent = {cosf(angle), sinf(angle), 0.0f};
+	float above = 1.01f * thickness;
 	for (int i = 0; i < grid.vertex_count; ++i) {
 		plait_vec3 p = grid.positions[i];
-		/* Laid in the plane, a thickness above it. */
-		grid.positions[i] = (plait_vec3){p.x * tangent.x + 0.0101f * plane.normal.x,
-		                                 p.x * tangent.y + 0.0101f * plane.normal.y, p.z};
+		grid.positions[i] =
+		    (plait_vec3){p.x * tangent.x + above * normal.x, p.x * tangent.y + above * normal.y, p.z};
 	}
 	plait_cloth_def cloth = plait_default_cloth_def();
 	cloth.mesh = test_grid_mesh(&grid);
 	cloth.surface.friction = mu;
-	cloth.surface.thickness = 0.01f;
+	cloth.surface.thickness = thickness;
 	plait_object_id id = plait_create_cloth(world, &cloth, NULL);
 	int centre = grid.vertex_count / 2;
 	plait_vec3 before = grid.positions[centre], after;
@@ -2074,31 +2091,48 @@ static float slide_on_tilted_plane(float degrees, float mu, int interval)
  * in: Coulomb's law over the substep, as with one pass. Contact passes only push. When they
  * rubbed too, with each pass's own push as its limit, the sheet at 30 degrees crept 22 mm; with
  * no rub where a particle rests, the iteration that ends the substep finds it pushed out already
- * and the sheet at 20 degrees slid 2.3 m. */
-static void expect_coulomb_on_a_slope(int interval)
+ * and the sheet at 20 degrees slid 2.3 m (on a mesh, until resting particles rubbed there too:
+ * 1.8 m, and twice Coulomb's distance at 35 degrees). A particle that rests counts as touching
+ * for the next contact passes: without that the 24 x 24 sheet on the plane at 30 degrees crept
+ * 16 mm. */
+static void expect_coulomb_on_a_slope(slope_ground ground, int interval, int quads, float thickness)
 {
-	float moved = slide_on_tilted_plane(20.0f, 0.5f, interval); /* tan 20 = 0.36 < 0.5 */
-	cr_expect_lt(fabsf(moved), 0.01f, "passes %d: stuck at 20 degrees with mu 0.5, but moved %g m", interval,
-	             (double)moved);
-	moved = slide_on_tilted_plane(30.0f, 0.6f, interval); /* tan 30 = 0.577 < 0.6 */
-	cr_expect_lt(fabsf(moved), 0.02f, "passes %d: stuck at 30 degrees with mu 0.6, but moved %g m", interval,
-	             (double)moved);
+	const char *on = ground == SLOPE_PLANE ? "plane" : "mesh";
+	float moved = slide_on_a_slope(ground, 20.0f, 0.5f, interval, quads, thickness); /* tan 20 = 0.36 < 0.5 */
+	cr_expect_lt(fabsf(moved), 0.005f,
+	             "%s, %d quads, passes %d: stuck at 20 degrees with mu 0.5, but moved %g m", on, quads,
+	             interval, (double)moved);
+	moved = slide_on_a_slope(ground, 30.0f, 0.6f, interval, quads, thickness); /* tan 30 = 0.577 < 0.6 */
+	cr_expect_lt(fabsf(moved), 0.005f,
+	             "%s, %d quads, passes %d: stuck at 30 degrees with mu 0.6, but moved %g m", on, quads,
+	             interval, (double)moved);
 	/* Sliding: a = g (sin - mu cos), 2 s: d = a t^2 / 2. */
 	float cases[2][2] = {{35.0f, 0.5f}, {45.0f, 0.3f}};
 	for (int k = 0; k < 2; ++k) {
 		float theta = cases[k][0] * 3.14159265f / 180.0f, mu = cases[k][1];
 		float expected = 0.5f * 9.81f * (sinf(theta) - mu * cosf(theta)) * 4.0f;
-		moved = slide_on_tilted_plane(cases[k][0], mu, interval);
+		moved = slide_on_a_slope(ground, cases[k][0], mu, interval, quads, thickness);
 		cr_expect(moved > 0.7f * expected && moved < 1.3f * expected,
-		          "passes %d: at %g degrees with mu %g it slid %g m, Coulomb says %g m", interval,
-		          (double)cases[k][0], (double)mu, (double)moved, (double)expected);
+		          "%s, %d quads, passes %d: at %g degrees with mu %g it slid %g m, Coulomb says %g m", on,
+		          quads, interval, (double)cases[k][0], (double)mu, (double)moved, (double)expected);
 	}
 }
 
 Test(collide, cloth_on_a_tilted_plane_sticks_when_tan_theta_is_below_mu_and_slides_otherwise)
 {
-	expect_coulomb_on_a_slope(0);
-	expect_coulomb_on_a_slope(1);
+	for (int interval = 0; interval <= 1; ++interval) {
+		expect_coulomb_on_a_slope(SLOPE_PLANE, interval, 6, 0.01f);
+		expect_coulomb_on_a_slope(SLOPE_PLANE, interval, 24, 0.004f);
+	}
+}
+
+/* The same on a triangle mesh collider, whose particles rest on its faces (contact.c,
+ * collide_point_with_mesh). */
+Test(collide, cloth_on_a_tilted_mesh_sticks_when_tan_theta_is_below_mu_and_slides_otherwise)
+{
+	for (int interval = 0; interval <= 1; ++interval) {
+		expect_coulomb_on_a_slope(SLOPE_MESH, interval, 24, 0.004f);
+	}
 }
 
 /* A 0.3 m sheet (6 x 6 quads) lying on a 1.6 m sheet (16 x 16) that lies on a plane tilted by
@@ -2109,10 +2143,10 @@ Test(collide, cloth_on_a_tilted_plane_sticks_when_tan_theta_is_below_mu_and_slid
  * lower sheet's centre, in `seconds`. */
 static float slide_on_a_sheet_on_a_slope(float degrees, float mu, int interval, float seconds)
 {
-	plait_collider_def plane;
-	plait_world_id world = world_with_a_slope(degrees, 1.0f, interval, &plane);
+	plait_vec3 normal;
+	plait_world_id world = world_with_a_slope(SLOPE_PLANE, degrees, 1.0f, interval, &normal);
 	float angle = degrees * 3.14159265f / 180.0f;
-	plait_vec3 normal = plane.normal, tangent = {cosf(angle), sinf(angle), 0.0f};
+	plait_vec3 tangent = {cosf(angle), sinf(angle), 0.0f};
 	const float thickness = 0.005f;
 	plait_object_id sheets[2];
 	int centres[2];
