@@ -2204,12 +2204,15 @@ Test(collide, cloth_on_cloth_on_a_slope_sticks_when_tan_theta_is_below_mu_and_sl
 		          "passes %d: at 35 degrees with mu 0.5 it slid %g m, Coulomb says %g m", interval,
 		          (double)moved, (double)expected);
 	}
-	/* tan 30 = 0.577, within 4% of mu: with contact passes the upper sheet creeps 15 mm in 2 s
-	 * (54 mm with friction's limit spent on magnitudes, not clamped as a total: rub). */
-	float moved = slide_on_a_sheet_on_a_slope(30.0f, 0.6f, 0, 2.0f);
-	cr_expect_lt(fabsf(moved), 0.005f, "stuck at 30 degrees with mu 0.6, but moved %g m", (double)moved);
-	moved = slide_on_a_sheet_on_a_slope(30.0f, 0.6f, 1, 2.0f);
-	cr_expect_lt(fabsf(moved), 0.02f, "passes 1: at 30 degrees with mu 0.6 it crept %g m", (double)moved);
+	/* tan 30 = 0.577, within 4% of mu. With contact passes the upper sheet crept 54 mm in 2 s
+	 * with friction's limit spent on magnitudes, not clamped as a total (rub), and 12 mm while a
+	 * list gathered again at a collision iteration dropped the sums of the contact passes before
+	 * it (mesh_contact_carry.c); 1 mm since. */
+	for (int interval = 0; interval <= 1; ++interval) {
+		float moved = slide_on_a_sheet_on_a_slope(30.0f, 0.6f, interval, 2.0f);
+		cr_expect_lt(fabsf(moved), 0.005f, "passes %d: stuck at 30 degrees with mu 0.6, but moved %g m",
+		             interval, (double)moved);
+	}
 }
 
 /* ---- Curves: segments ------------------------------------------------------------------- */

@@ -84,6 +84,8 @@ void plait_mesh_contacts_destroy(plait_sim *sim)
 	const plait_allocator *a = &sim->allocator;
 	plait_mesh_contacts_free_elements(mc, a);
 	plait_free(a, mc->pairs);
+	plait_mesh_contacts_free_carried(mc, a);
+	plait_free(a, mc->carry_head);
 	plait_free(a, mc->zone_parent);
 	plait_free(a, mc->touched);
 	plait_free(a, mc->members);

@@ -346,6 +346,9 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	plait_free(a, mc->restitution_sum);
 	plait_free(a, mc->restitution_weight);
 	plait_free(a, mc->tangled);
+	plait_free(a, mc->carry_head);
+	mc->carried_count = 0;
+	mc->carry_head = plait_alloc_zero(a, (size_t)count, sizeof(int));
 	mc->tangled = plait_alloc_zero(a, (size_t)count, sizeof(uint8_t));
 	mc->tangle_count = 0;
 	mc->tangle_push_count = 0;
@@ -371,12 +374,13 @@ bool plait_mesh_contacts_reserve_particles(plait_sim *sim, plait_mesh_contacts *
 	    mc->sweep_end == NULL || mc->sweep_motion == NULL || mc->path_lower == NULL ||
 	    mc->path_upper == NULL || mc->motion == NULL || mc->path_end == NULL || mc->guard == NULL ||
 	    mc->object_of == NULL || mc->around == NULL || mc->restitution_sum == NULL ||
-	    mc->restitution_weight == NULL || mc->tangled == NULL) {
+	    mc->restitution_weight == NULL || mc->tangled == NULL || mc->carry_head == NULL) {
 		mc->particle_capacity = 0;
 		return false;
 	}
 	for (int i = 0; i < count; ++i) {
 		mc->zone_parent[i] = -1;
+		mc->carry_head[i] = -1;
 	}
 	mc->particle_capacity = count;
 	return true;

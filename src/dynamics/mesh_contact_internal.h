@@ -402,6 +402,13 @@ typedef struct plait_mesh_contacts {
 	bool around_flat;
 	uint8_t *element_around;
 	int (*members)[2]; /* (root, particle), sorted to walk zone by zone */
+	/* Pairs of a list being gathered again or mended, whose substep state the new listing
+	 * carries over (mesh_contact_carry.c); carried_next chains those with the same first vertex,
+	 * from carry_head (per particle, -1 when none: all -1 between listings). */
+	contact_pair *carried;
+	int *carried_next;
+	int carried_count, carried_capacity;
+	int *carry_head;
 } plait_mesh_contacts;
 
 /* The failsafe keeps primitives this far apart, scene units: a thousandth of a millimetre in
@@ -702,6 +709,20 @@ typedef enum pair_projection {
 	                          * touched a collider in the substep moves (the colliders keep the
 	                          * last word on it) */
 } pair_projection;
+
+/* A list gathered again or mended within a substep (at a collision iteration after the
+ * substep's contact passes projected the list before; in the failsafe after the collision
+ * iteration) keeps the substep's state of the pairs it lists again (mesh_contact_carry.c):
+ * before the listing, plait_mesh_contacts_carry keeps each pair of the old list that has some
+ * (plait_mesh_contacts_has_state) and is not kept in place; list_pair gives a new pair the state
+ * of the same pair carried (plait_mesh_contacts_take_carried); after it,
+ * plait_mesh_contacts_drop_carried forgets them. Out of memory, a pair's state is lost, as it
+ * was before carrying. */
+bool plait_mesh_contacts_has_state(const plait_mesh_contacts *mc, const contact_pair *pair);
+void plait_mesh_contacts_carry(plait_sim *sim, plait_mesh_contacts *mc, const contact_pair *pair);
+void plait_mesh_contacts_take_carried(const plait_mesh_contacts *mc, contact_pair *pair);
+void plait_mesh_contacts_drop_carried(plait_mesh_contacts *mc);
+void plait_mesh_contacts_free_carried(plait_mesh_contacts *mc, const plait_allocator *a);
 
 /* One projection of `pair` to its contact distance (mesh_contact.c), counting a CCD hit in
  * *ccd_hits. Returns 1 when it moved the pair's vertices. */

@@ -514,6 +514,11 @@ static float path_guard(const plait_sim *sim, const plait_mesh_contacts *mc, int
 
 void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 {
+	for (int k = 0; k < mc->pair_count; ++k) {
+		if (plait_mesh_contacts_has_state(mc, &mc->pairs[k])) {
+			plait_mesh_contacts_carry(sim, mc, &mc->pairs[k]);
+		}
+	}
 	mc->pair_count = 0;
 	mc->list_changes += 1;
 	mc->planned = 0; /* a new list, in the gather's order (mesh_contact_plan.c) */
@@ -583,6 +588,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->features_kept = pass.features_kept;
 	mc->features_left_out = pass.features_left_out;
 	mc->list_valid = !mc->out_of_memory;
+	plait_mesh_contacts_drop_carried(mc);
 }
 
 /* Whether the list still holds every pair that can touch or cross: within LIST_LIFE substeps
@@ -848,6 +854,9 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 		for (int m = 0; m < pair_size[pair->type]; ++m) {
 			any |= mc->around[pair->v[m]];
 		}
+		if (any && plait_mesh_contacts_has_state(mc, pair)) {
+			plait_mesh_contacts_carry(sim, mc, pair); /* listed again below, most of them */
+		}
 		if (!any) {
 			if (kept != k) { /* most pairs stay where they are */
 				mc->pairs[kept] = *pair;
@@ -893,6 +902,7 @@ void plait_mesh_contacts_relist_around(plait_sim *sim, plait_mesh_contacts *mc)
 	}
 	mc->listing_met += pass.met;
 	mc->list_valid = !mc->out_of_memory;
+	plait_mesh_contacts_drop_carried(mc);
 }
 
 long plait_mesh_contacts_listings(const plait_sim *sim)

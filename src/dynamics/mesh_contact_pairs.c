@@ -275,6 +275,7 @@ static void list_pair(pair_pass *pass, int type, const int *v, const vec3 *end, 
 		pair.gives_way[first->collision_layer < second->collision_layer ? 0 : 1] = 0;
 	}
 	start_side(&pair, start, end);
+	plait_mesh_contacts_take_carried(mc, &pair);
 	(void)add_pair(pass, &pair);
 }
 
