@@ -400,7 +400,8 @@ static plan_facts expect_plan_holds(plait_sim *sim)
 	return facts;
 }
 
-/* A long contact list (the pile of four 32 x 32 sheets lists 100,000 pairs as it lands) is kept in groups
+/* A long contact list (the pile of four 36 x 36 sheets lists 75,000-91,000 pairs as it settles;
+ * 32 x 32 sheets list about 63,500 since session 34, under PLAN_LEAST_PAIRS) is kept in groups
  * that the workers project side by side (mesh_contact_plan.c): the plan holds as the pile
  * settles, mended list after mended list, and after a row of vertices across a sheet was pinned
  * for a frame and let go: a plan made while they stood still treats them as tying no pairs
@@ -408,8 +409,9 @@ static plan_facts expect_plan_holds(plait_sim *sim)
  * the bits with 1, 2 and 8 workers. */
 Test(collide, a_long_contact_list_is_kept_in_groups_that_share_no_moving_vertex)
 {
+	const int n = 36;
 	collide_scene scene;
-	scene_totals t = run_scene(SCENE_PILE, 32, 30, &scene);
+	scene_totals t = run_scene(SCENE_PILE, n, 30, &scene);
 	expect_clean(&t, "pile");
 	plait_sim *sim = &scene.world.world->sim;
 	cr_expect_geq(expect_plan_holds(sim).slabs, 3, "the pairs lie in fewer than three slabs");
@@ -424,8 +426,8 @@ Test(collide, a_long_contact_list_is_kept_in_groups_that_share_no_moving_vertex)
 	cr_expect_geq(mc->plan_projections - projections, 6 * 3, "%ld projections on a plan in 6 frames",
 	              mc->plan_projections - projections);
 	plait_object_id sheet = scene.cloths[1];
-	int row = 32 * 16;
-	for (int k = 0; k < 32; ++k) {
+	int row = n * (n / 2);
+	for (int k = 0; k < n; ++k) {
 		plait_vec3 x;
 		cr_assert_eq(plait_object_get_positions(sheet, row + k, 1, &x, NULL), PLAIT_OK);
 		cr_assert_eq(plait_object_pin_vertex(sheet, row + k, x, &error), PLAIT_OK, "%s", error.message);
@@ -435,7 +437,7 @@ Test(collide, a_long_contact_list_is_kept_in_groups_that_share_no_moving_vertex)
 	cr_expect_gt(expect_plan_holds(sim).shared_pins, 0, "no pinned vertex is shared by two groups");
 	plait_mesh_contacts_check_plan(sim, sim->mesh_contacts); /* a frame's start: nothing changed */
 	cr_expect_eq(mc->plan_list, mc->list_changes, "a plan was dropped with no vertex pinned or let go");
-	for (int k = 0; k < 32; ++k) {
+	for (int k = 0; k < n; ++k) {
 		cr_assert_eq(plait_object_unpin_vertex(sheet, row + k, &error), PLAIT_OK, "%s", error.message);
 	}
 	plait_mesh_contacts_check_plan(sim, sim->mesh_contacts);
@@ -487,7 +489,7 @@ static void *refusing_alloc(size_t size, size_t alignment, void *context)
 Test(collide, a_plan_that_finds_no_memory_is_tried_once_a_list)
 {
 	collide_scene scene;
-	scene_totals t = run_scene(SCENE_PILE, 32, 31, &scene);
+	scene_totals t = run_scene(SCENE_PILE, 36, 31, &scene);
 	expect_clean(&t, "pile");
 	plait_sim *sim = &scene.world.world->sim;
 	plait_mesh_contacts *mc = sim->mesh_contacts;
@@ -2021,8 +2023,15 @@ Test(collide, sheets_that_start_closer_than_their_thickness_do_not_explode)
 	plait_destroy_world(world);
 }
 
-/* What a slope test's cloth lies on: a plane, or a triangle mesh (1 m squares, 24 m across). */
-typedef enum slope_ground { SLOPE_PLANE, SLOPE_MESH } slope_ground;
+/* What a slope test's cloth lies on: a plane, or a triangle mesh 24 m across, of 1 m squares or
+ * of one square (two triangles, as a ground made in a modelling tool often is), facing the cloth
+ * or (mirrored) away from it. */
+typedef enum slope_ground {
+	SLOPE_PLANE,
+	SLOPE_MESH,
+	SLOPE_TWO_TRIANGLES,
+	SLOPE_TWO_TRIANGLES_MIRRORED
+} slope_ground;
 
 /* A world at 60 fps without air, contact passes every `interval` stretch iterations, with a
  * ground through the origin tilted by `degrees` about z, of friction mu; *normal gets its
@@ -2041,11 +2050,13 @@ static plait_world_id world_with_a_slope(slope_ground ground, float degrees, flo
 	slope.normal = *normal;
 	slope.surface.friction = mu;
 	test_grid grid = {0};
-	if (ground == SLOPE_MESH) {
-		grid = test_grid_make(24, 24, 24.0f, 24.0f);
+	if (ground != SLOPE_PLANE) {
+		int squares = ground == SLOPE_MESH ? 24 : 1;
+		grid = test_grid_make(squares, squares, 24.0f, 24.0f);
 		for (int i = 0; i < grid.vertex_count; ++i) {
 			plait_vec3 p = grid.positions[i];
-			grid.positions[i] = (plait_vec3){p.x * cosf(angle), p.x * sinf(angle), p.z};
+			float z = ground == SLOPE_TWO_TRIANGLES_MIRRORED ? -p.z : p.z;
+			grid.positions[i] = (plait_vec3){p.x * cosf(angle), p.x * sinf(angle), z};
 		}
 		slope.shape = PLAIT_SHAPE_MESH;
 		slope.mesh = test_grid_mesh(&grid);
@@ -2097,7 +2108,8 @@ static float slide_on_a_slope(slope_ground ground, float degrees, float mu, int 
  * 16 mm. */
 static void expect_coulomb_on_a_slope(slope_ground ground, int interval, int quads, float thickness)
 {
-	const char *on = ground == SLOPE_PLANE ? "plane" : "mesh";
+	const char *names[] = {"plane", "mesh", "two triangles", "two triangles, mirrored"};
+	const char *on = names[ground];
 	float moved = slide_on_a_slope(ground, 20.0f, 0.5f, interval, quads, thickness); /* tan 20 = 0.36 < 0.5 */
 	cr_expect_lt(fabsf(moved), 0.005f,
 	             "%s, %d quads, passes %d: stuck at 20 degrees with mu 0.5, but moved %g m", on, quads,
@@ -2127,11 +2139,19 @@ Test(collide, cloth_on_a_tilted_plane_sticks_when_tan_theta_is_below_mu_and_slid
 }
 
 /* The same on a triangle mesh collider, whose particles rest on its faces (contact.c,
- * collide_point_with_mesh). */
+ * collide_point_with_mesh). On two triangles the sheet lies across their shared edge, which
+ * mesh contacts keep (its ends meet the open border: mesh_contact_features.c); its edge-edge
+ * pairs lift the sheet's vertices there a few micrometres off the faces, so the sheet rests on
+ * those pairs. With contact passes it crept 7.4 mm at 30 degrees (on the mirrored ground; 1.2 mm
+ * on the other) until pairs resting in a collision iteration were projected in the contact passes
+ * after it too (1.2 and 0.2 mm since). A coarser sheet (6 x 6, 1 cm thick) still creeps there:
+ * 15 mm (docs/architecture.md). */
 Test(collide, cloth_on_a_tilted_mesh_sticks_when_tan_theta_is_below_mu_and_slides_otherwise)
 {
 	for (int interval = 0; interval <= 1; ++interval) {
 		expect_coulomb_on_a_slope(SLOPE_MESH, interval, 24, 0.004f);
+		expect_coulomb_on_a_slope(SLOPE_TWO_TRIANGLES, interval, 24, 0.004f);
+		expect_coulomb_on_a_slope(SLOPE_TWO_TRIANGLES_MIRRORED, interval, 24, 0.004f);
 	}
 }
 

@@ -345,15 +345,20 @@ bool plait_mesh_contacts_respond(plait_sim *sim, contact_pair *pair, const float
 
 /* A pair at separation `separation` along n, not pressing: friction still takes off the
  * substep's tangential motion, within what the substep's pushes allow, if it was pushed in the
- * substep and rests within RESTING_SLACK; no push. */
+ * substep and rests within RESTING_SLACK; no push. Such a pair counts as pushed for the contact
+ * passes that follow (pushed_last), as a particle resting on a collider does (contact.c,
+ * rub_resting): left out, a vertex the constraints had lifted off the sheet below was not held
+ * out by the next contact passes while its neighbours were, the constraints carried part of its
+ * weight, and a sheet on a sheet on a slope below its friction angle crept down it. */
 static void rub_resting(plait_sim *sim, contact_pair *pair, const float *g, vec3 n, float separation,
                         pair_projection how)
 {
-	if (how == PROJECT_AGAIN || !(pair->friction > 0.0f) ||
-	    !(separation < pair->distance * (1.0f + RESTING_SLACK))) {
+	if (how == PROJECT_AGAIN || !(separation < pair->distance * (1.0f + RESTING_SLACK)) ||
+	    !(pair->push_sum > 0.0f)) {
 		return;
 	}
-	if (!(pair->push_sum > 0.0f)) {
+	pair->pushed_last = 1;
+	if (!(pair->friction > 0.0f)) {
 		return;
 	}
 	plait_particles *p = &sim->particles;

@@ -138,7 +138,7 @@ typedef struct contact_pair {
 	 * closing). */
 	uint8_t restitutes;
 	uint8_t pushed;
-	uint8_t pushed_last;  /* pushed at the last collision iteration: contact passes project it */
+	uint8_t pushed_last;  /* pushed or rested at the last collision iteration: contact passes project it */
 	uint8_t gives_way[2]; /* 0 for a primitive not pushed (lower collision layer), else 1 */
 	uint8_t sums_substep; /* the substep push_sum and rubbed are of (mc->substep_serial's low bits) */
 	float distance;       /* contact distance, scene units */
@@ -729,9 +729,9 @@ void plait_mesh_contacts_free_carried(plait_mesh_contacts *mc, const plait_alloc
 int plait_mesh_contacts_project_pair(plait_sim *sim, contact_pair *pair, pair_projection how, int *ccd_hits);
 /* The list's pairs projected once as `how` says, a list of PLAN_LEAST_PAIRS or more in its
  * plan's order and on the workers (mesh_contact_plan.c); returns the contacts. A collision
- * iteration's projection (PROJECT_FULL) notes in each pair whether it pushed (pushed_last); a
- * contact pass projects only those that did; after the colliders, only those with a vertex that
- * touched a collider in the substep (and a push notes it too). */
+ * iteration's projection (PROJECT_FULL) notes in each pair whether it pushed or rested
+ * (pushed_last); a contact pass projects only those that did; after the colliders, only those
+ * with a vertex that touched a collider in the substep (and a push or rest notes it too). */
 int plait_mesh_contacts_project_list(plait_sim *sim, plait_mesh_contacts *mc, pair_projection how);
 /* Puts the list in the plan's order, unless it is already; false when out of memory (the list
  * then keeps its order and is projected one pair after another: another result than the plan's,

@@ -349,11 +349,12 @@ static int project_range(plait_sim *sim, plait_mesh_contacts *mc, int begin, int
 			}
 			continue;
 		}
-		int pushed = plait_mesh_contacts_project_pair(sim, pair, how, ccd_hits);
 		if (how == PROJECT_FULL) {
-			pair->pushed_last = pushed > 0;
-		} else if (how == PROJECT_AFTER_COLLIDERS) {
-			pair->pushed_last = pair->pushed_last || pushed > 0;
+			pair->pushed_last = 0; /* set again when it pushes or rests (rub_resting) */
+		}
+		int pushed = plait_mesh_contacts_project_pair(sim, pair, how, ccd_hits);
+		if (how != PROJECT_AGAIN && pushed > 0) {
+			pair->pushed_last = 1;
 		}
 		contacts += pushed;
 	}
