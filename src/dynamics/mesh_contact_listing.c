@@ -41,7 +41,7 @@ static long substeps_since_gather(const plait_mesh_contacts *mc)
  * (path_end), and the list serves on only while its vertices rest (resting lists, list_holds). */
 static bool past_window(const plait_mesh_contacts *mc)
 {
-	return substeps_since_gather(mc) > mc->list_serves;
+	return substeps_since_gather(mc) > mc->list_serves || mc->list_rests;
 }
 
 /* Particle i's motion a substep along its path over the substep `since` (counted from the
@@ -526,6 +526,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->gather_serial = mc->substep_serial;
 	mc->listings += 1;
 	mc->list_serves = mc->short_lists ? 0 : LIST_SUBSTEPS;
+	mc->list_rests = false;
 	const plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
 		mc->x_gather[i] = p->point[i].x;
@@ -653,6 +654,90 @@ static int count_strays(plait_sim *sim, const plait_mesh_contacts *mc, uint8_t *
 	return atomic_load_explicit(&job.strays, memory_order_relaxed);
 }
 
+/* Resting lists from the substep after the gather's. Cloth resting on a collider or on itself
+ * jitters about its place: a vertex that moved down at the gather's substep moves back up in the
+ * next, a guard or more off the path that went on down, and so do hundreds of its neighbours; the
+ * list was then gathered again at every substep (performance.md, session 35). A list that serves
+ * on holds the pairs that can come within their contact distance while every vertex keeps
+ * within its guard of x_gather + a u (u its motion at the gather over the substep so far) for
+ * one `a` common to all, anywhere in [-1, 1] (plait_mesh_contacts_gather: two vertices there
+ * have moved relative to each other by |a| times their relative motion, which the listing
+ * allows them); a short list, only for a = 0 (it lists the pairs within their contact distance
+ * at the gather, and of those farther off only the ones whose paths so far may have crossed).
+ * So every path may stop at such an `a` for good (path_end a), with nothing listed again: a = 0
+ * where the gather found the vertices, -1 where they began its substep (settled at the end of
+ * the one before; the gather comes after the substep's prediction), 1 where a path that serves
+ * on ends. In the substep after its gather, a list whose vertices keep nearer one of these than
+ * to their paths (fewer strays), or a short list whose vertices keep near the first all but a
+ * few, stops every path there and serves on past its window (mc->list_rests), mended around
+ * those that leave, as any resting list. */
+#define REST_STOPS 3
+static const float rest_stop[REST_STOPS] = {0.0f, -1.0f, 1.0f};
+
+typedef struct rest_job {
+	const plait_sim *sim;
+	const plait_mesh_contacts *mc;
+	int stops;                       /* of rest_stop[]: all for a list that serves on, 1 for a short one */
+	_Atomic int on_paths;            /* out of their guards of their paths, at the substep's start or now */
+	_Atomic int stopped[REST_STOPS]; /* out of their guards of x_gather + rest_stop[k] u */
+} rest_job;
+
+static void rest_range(void *context, int begin, int end)
+{
+	rest_job *job = context;
+	const plait_particles *p = &job->sim->particles;
+	const plait_mesh_contacts *mc = job->mc;
+	int on_paths = 0, stopped[REST_STOPS] = {0};
+	for (int i = begin; i < end; ++i) {
+		if (mc->object_of[i] < 0) {
+			continue;
+		}
+		float guard_sq = mc->guard[i] * mc->guard[i];
+		vec3 start = p->x_prev[i], now = p->point[i].x;
+		/* Substep 1 from the gather's: its start is path_at 0, now is path_at 1. */
+		on_paths += v3_length_sq(v3_sub(start, path_at(mc, i, 0.0f))) > guard_sq ||
+		            v3_length_sq(v3_sub(now, path_at(mc, i, 1.0f))) > guard_sq;
+		for (int k = 0; k < job->stops; ++k) {
+			vec3 stop = v3_mul_add(mc->x_gather[i], rest_stop[k], mc->motion[i]);
+			stopped[k] +=
+			    v3_length_sq(v3_sub(start, stop)) > guard_sq || v3_length_sq(v3_sub(now, stop)) > guard_sq;
+		}
+	}
+	atomic_fetch_add_explicit(&job->on_paths, on_paths, memory_order_relaxed);
+	for (int k = 0; k < job->stops; ++k) {
+		atomic_fetch_add_explicit(&job->stopped[k], stopped[k], memory_order_relaxed);
+	}
+}
+
+/* At the substep after the gather's: whether the list's paths stop at one of rest_stop[] (see
+ * rest_job), and if so stops them there. */
+static void maybe_rest(plait_sim *sim, plait_mesh_contacts *mc)
+{
+	rest_job job = {.sim = sim, .mc = mc, .stops = mc->list_serves > 0 ? REST_STOPS : 1};
+	atomic_init(&job.on_paths, 0);
+	for (int k = 0; k < REST_STOPS; ++k) {
+		atomic_init(&job.stopped[k], 0);
+	}
+	int count = sim->particles.count;
+	plait_parallel_for(&sim->parallel, rest_range, &job, 0, count, HOLDS_GRAIN);
+	int best = 0;
+	for (int k = 1; k < job.stops; ++k) {
+		if (atomic_load_explicit(&job.stopped[k], memory_order_relaxed) <
+		    atomic_load_explicit(&job.stopped[best], memory_order_relaxed)) {
+			best = k;
+		}
+	}
+	int strays = atomic_load_explicit(&job.stopped[best], memory_order_relaxed);
+	bool rests = mc->list_serves > 0 ? strays < atomic_load_explicit(&job.on_paths, memory_order_relaxed)
+	                                 : strays == 0 || plait_mesh_contacts_few_strays(strays, count);
+	if (rests) {
+		for (int i = 0; i < count; ++i) {
+			mc->path_end[i] = rest_stop[best];
+		}
+		mc->list_rests = true;
+	}
+}
+
 static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed, int *stray_count)
 {
 	mc->paths_kept = false;
@@ -660,7 +745,11 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 		return false;
 	}
 	long since = substeps_since_gather(mc);
-	if (since < 0 || since > LIST_LIFE || (mc->list_serves == 0 && since > LIST_SUBSTEPS)) {
+	if (since == 1 && !mc->list_rests && strayed != NULL) {
+		maybe_rest(sim, mc);
+	}
+	if (since < 0 || since > LIST_LIFE ||
+	    (mc->list_serves == 0 && !mc->list_rests && since > LIST_SUBSTEPS)) {
 		return false;
 	}
 	const plait_particles *p = &sim->particles;
@@ -668,7 +757,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	 * the paths were kept (few strays) is asked. When the vertices out of their guards are
 	 * already too many for that, the cloth edges' bounds, which could only add strays, are not
 	 * measured (a falling cloth's hold test spent half its time there). */
-	bool answered = mc->list_serves == 0 && since >= 1 && strayed != NULL;
+	bool answered = mc->list_serves == 0 && !mc->list_rests && since >= 1 && strayed != NULL;
 	int strays = 0;
 	if (answered) {
 		strays = count_strays(sim, mc, strayed, since);
@@ -716,7 +805,7 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 	    !plait_mesh_contacts_few_strays(strays, atomic_load_explicit(&job.movable, memory_order_relaxed))) {
 		return false;
 	}
-	return mc->list_serves > 0 || since <= 0;
+	return mc->list_serves > 0 || mc->list_rests || since <= 0;
 }
 
 bool plait_mesh_contacts_list_covers(plait_sim *sim, plait_mesh_contacts *mc)
