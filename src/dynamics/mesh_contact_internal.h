@@ -387,6 +387,7 @@ typedef struct plait_mesh_contacts {
 	 * window. */
 	int list_serves;
 	bool short_lists, paths_kept, list_rests;
+	bool rest_asked; /* whether the list was asked to rest (once, in the substep after its gather) */
 	/* Failsafe scratch: union-find over particles, and the particles it touched. */
 	int particle_capacity;
 	int *zone_parent;

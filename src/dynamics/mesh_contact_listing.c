@@ -527,6 +527,7 @@ void plait_mesh_contacts_gather(plait_sim *sim, plait_mesh_contacts *mc)
 	mc->listings += 1;
 	mc->list_serves = mc->short_lists ? 0 : LIST_SUBSTEPS;
 	mc->list_rests = false;
+	mc->rest_asked = false;
 	const plait_particles *p = &sim->particles;
 	for (int i = 0; i < p->count; ++i) {
 		mc->x_gather[i] = p->point[i].x;
@@ -745,7 +746,8 @@ static bool list_holds(plait_sim *sim, plait_mesh_contacts *mc, uint8_t *strayed
 		return false;
 	}
 	long since = substeps_since_gather(mc);
-	if (since == 1 && !mc->list_rests && strayed != NULL) {
+	if (since == 1 && !mc->rest_asked && strayed != NULL) {
+		mc->rest_asked = true;
 		maybe_rest(sim, mc);
 	}
 	if (since < 0 || since > LIST_LIFE ||
