@@ -381,10 +381,10 @@ typedef struct plait_mesh_contacts {
 	 * list serves on while its vertices rest at their paths' ends), or 0 when the last list's
 	 * vertices left their paths before it could serve again (short_lists, serving only their
 	 * own substep; see plait_mesh_contacts_gather). paths_kept: the last check of a list found
-	 * every vertex but a few on its path. list_rests: every path stopped at the gather's positions
-	 * (the substep after the gather found its vertices nearer those than their paths: resting
-	 * cloth that jitters about its place; list_holds), so the list serves on as one past its
-	 * window. */
+	 * every vertex but a few on its path. list_rests: every path stopped for good where the
+	 * gather found its vertices or where they began its substep (the substep after the gather
+	 * found them nearer there than their paths: resting cloth that jitters about its place;
+	 * mesh_contact_listing.c, maybe_rest), so the list serves on as one past its window. */
 	int list_serves;
 	bool short_lists, paths_kept, list_rests;
 	bool rest_asked; /* whether the list was asked to rest (once, in the substep after its gather) */

@@ -665,15 +665,16 @@ static int count_strays(plait_sim *sim, const plait_mesh_contacts *mc, uint8_t *
  * have moved relative to each other by |a| times their relative motion, which the listing
  * allows them); a short list, only for a = 0 (it lists the pairs within their contact distance
  * at the gather, and of those farther off only the ones whose paths so far may have crossed).
- * So every path may stop at such an `a` for good (path_end a), with nothing listed again: a = 0
- * where the gather found the vertices, -1 where they began its substep (settled at the end of
- * the one before; the gather comes after the substep's prediction), 1 where a path that serves
- * on ends. In the substep after its gather, a list whose vertices keep nearer one of these than
- * to their paths (fewer strays), or a short list whose vertices keep near the first all but a
- * few, stops every path there and serves on past its window (mc->list_rests), mended around
- * those that leave, as any resting list. */
-#define REST_STOPS 3
-static const float rest_stop[REST_STOPS] = {0.0f, -1.0f, 1.0f};
+ * So every path may stop at such an `a` for good (path_end a, a <= 0), with nothing listed
+ * again: a = 0 where the gather found the vertices, -1 where they began its substep (settled at
+ * the end of the one before; the gather comes after the substep's prediction). (A list that
+ * serves on stops at 1, its paths' ends, past its window anyway.) In the substep after its
+ * gather, a list whose vertices keep nearer one of these than to their paths (fewer strays), or
+ * a short list whose vertices keep near the first all but a few, stops every path there and
+ * serves on past its window (mc->list_rests), mended around those that leave, as any resting
+ * list. */
+#define REST_STOPS 2
+static const float rest_stop[REST_STOPS] = {0.0f, -1.0f};
 
 typedef struct rest_job {
 	const plait_sim *sim;
